@@ -59,12 +59,18 @@ impl TomlFile {
             field: String::new(),
             msg: format!("cannot read the file: {e}"),
         })?;
-        Ok(Self { name: path.to_string(), text })
+        Ok(Self {
+            name: path.to_string(),
+            text,
+        })
     }
 
     /// Wraps an in-memory text (an embedded default, a test).
     pub fn from_text(name: &str, text: &str) -> Self {
-        Self { name: name.to_string(), text: text.to_string() }
+        Self {
+            name: name.to_string(),
+            text: text.to_string(),
+        }
     }
 
     /// Deserialises the whole file. Syntax errors, unknown fields and wrong types
@@ -79,8 +85,19 @@ impl TomlFile {
                 None => (None, None),
             };
             // The toml message is multi-line with a source excerpt; keep its first line.
-            let msg = e.message().lines().next().unwrap_or("invalid TOML").to_string();
-            FileError { file: self.name.clone(), line, col, field: String::new(), msg }
+            let msg = e
+                .message()
+                .lines()
+                .next()
+                .unwrap_or("invalid TOML")
+                .to_string();
+            FileError {
+                file: self.name.clone(),
+                line,
+                col,
+                field: String::new(),
+                msg,
+            }
         })
     }
 
@@ -108,13 +125,17 @@ impl TomlFile {
                         Some(DeValue::Table(t)) => t,
                         _ => break,
                     };
-                    let Some((key, v)) = t.get_key_value(k.as_str()) else { break };
+                    let Some((key, v)) = t.get_key_value(k.as_str()) else {
+                        break;
+                    };
                     best = Some(key.span().start);
                     table = t;
                     value = Some(v.get_ref());
                 }
                 Seg::Index(i) => {
-                    let Some(DeValue::Array(a)) = value else { break };
+                    let Some(DeValue::Array(a)) = value else {
+                        break;
+                    };
                     let Some(v) = a.get(*i) else { break };
                     best = Some(v.span().start);
                     value = Some(v.get_ref());
@@ -130,7 +151,13 @@ impl TomlFile {
             Some((l, c)) => (Some(l), Some(c)),
             None => (None, None),
         };
-        FileError { file: self.name.clone(), line, col, field: field.to_string(), msg: msg.into() }
+        FileError {
+            file: self.name.clone(),
+            line,
+            col,
+            field: field.to_string(),
+            msg: msg.into(),
+        }
     }
 }
 

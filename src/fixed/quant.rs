@@ -1,0 +1,318 @@
+//! Exact quantisation: rounding of dyadic rationals and overflow handling.
+
+use super::{Overflow, QFormat, Quant, SignalStats};
+
+/// Rounds the exact rational value `raw * 2^-shift` to an integer with mode `q`.
+///
+/// Pure integer arithmetic, exact for every `raw` and every `shift` (0..=100 is the intended
+/// range; larger shifts are handled too: the value is then below one in magnitude).
+#[inline]
+pub fn round_shift(raw: i128, shift: u32, q: Quant) -> i128 {
+    if shift == 0 {
+        return raw;
+    }
+    if shift >= 127 {
+        // |raw * 2^-shift| <= 1, with equality only for i128::MIN at shift 127.
+        if shift == 127 && raw == i128::MIN {
+            return -1;
+        }
+        // Otherwise |value| < 1/2 and every mode rounds it like +-1/4 (sticky reduction).
+        return round_shift(raw.signum(), 2, q);
+    }
+    let floor = raw >> shift;
+    let rem = raw & ((1i128 << shift) - 1);
+    if rem == 0 {
+        return floor;
+    }
+    let half = 1i128 << (shift - 1);
+    let up = match q {
+        Quant::Trn => false,
+        Quant::TrnZero => raw < 0,
+        _ if rem != half => rem > half,
+        // Exact tie: the value is floor + 1/2, negative iff floor < 0.
+        Quant::Rnd => true,
+        Quant::RndZero => floor < 0,
+        Quant::RndInf => floor >= 0,
+        Quant::RndMinInf => false,
+        Quant::RndConv => floor & 1 != 0,
+    };
+    floor + i128::from(up)
+}
+
+/// A quantised code and whether the overflow mode had to act.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Quantized {
+    /// The canonical code, within `[min_code, max_code]` of the format.
+    pub code: i64,
+    /// True when the rounded value was outside the format's range (for `SAT_SYM` also when it
+    /// was exactly `-2^(W-1)`), i.e. the overflow mode changed it. With [`Overflow::Error`] the
+    /// caller must stop.
+    pub overflow: bool,
+}
+
+/// A quantisation point: target format, rounding mode and overflow mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct Quantizer {
+    /// Target format.
+    pub format: QFormat,
+    /// Rounding mode.
+    pub quant: Quant,
+    /// Overflow mode.
+    pub overflow: Overflow,
+}
+
+impl Quantizer {
+    /// Builds a quantiser (the format is not validated here).
+    pub const fn new(format: QFormat, quant: Quant, overflow: Overflow) -> Self {
+        Self {
+            format,
+            quant,
+            overflow,
+        }
+    }
+
+    /// Quantises the exact value `raw * 2^-raw_frac` (a negative `raw_frac` means
+    /// `raw << -raw_frac`). Exact for every input, including shifts that overflow `i128`.
+    #[inline]
+    pub fn quantize_raw(&self, raw: i128, raw_frac: i32) -> Quantized {
+        self.handle_overflow(self.round_raw(raw, raw_frac))
+    }
+
+    /// Rounds `raw * 2^-raw_frac` to an integer number of LSBs of the format, before overflow
+    /// handling. Values too large for `i128` come back as a proxy that is far outside any
+    /// format's range, has the right sign and is congruent to the exact value modulo 2^32
+    /// (so `WRAP` still gives the exact result).
+    #[inline]
+    pub(crate) fn round_raw(&self, raw: i128, raw_frac: i32) -> i128 {
+        let shift = i64::from(raw_frac) - i64::from(self.format.frac_bits);
+        if shift >= 0 {
+            round_shift(raw, shift.min(1 << 20) as u32, self.quant)
+        } else {
+            let k = (-shift) as u32;
+            if raw == 0 {
+                0
+            } else if k < 127 && (raw.unsigned_abs().leading_zeros() > k + 1) {
+                raw << k
+            } else {
+                // |raw << k| >= 2^126: out of range for every format.
+                let low = if k < 128 {
+                    raw.wrapping_shl(k) & 0xFFFF_FFFF
+                } else {
+                    0
+                };
+                if raw > 0 {
+                    (i128::MAX & !0xFFFF_FFFF) | low
+                } else {
+                    i128::MIN | low
+                }
+            }
+        }
+    }
+
+    /// Quantises a real value, exactly for every finite `f64` (an `f64` is a dyadic rational).
+    /// NaN gives code 0 with `overflow = true`; `+-inf` overflow with their sign (`WRAP` gives 0,
+    /// the limit of huge values, which are all multiples of 2^W).
+    #[inline]
+    pub fn quantize_f64(&self, x: f64) -> Quantized {
+        match self.round_f64(x) {
+            Some(r) => self.handle_overflow(r),
+            None => Quantized {
+                code: 0,
+                overflow: true,
+            },
+        }
+    }
+
+    /// Rounds `x` to an integer number of LSBs before overflow handling; `None` for NaN.
+    #[inline]
+    pub(crate) fn round_f64(&self, x: f64) -> Option<i128> {
+        let bits = x.to_bits();
+        let neg = bits >> 63 != 0;
+        let exp = ((bits >> 52) & 0x7FF) as i32;
+        let frac = (bits & ((1u64 << 52) - 1)) as i128;
+        if exp == 0x7FF {
+            if frac != 0 {
+                return None;
+            }
+            return Some(if neg {
+                i128::MIN
+            } else {
+                i128::MAX & !0xFFFF_FFFF
+            });
+        }
+        let (mant, e) = if exp == 0 {
+            (frac, -1074)
+        } else {
+            (frac | (1i128 << 52), exp - 1075)
+        };
+        let m = if neg { -mant } else { mant };
+        Some(self.round_raw(m, -e))
+    }
+
+    /// Applies the overflow mode to an integer number of LSBs (e.g. after a saturating add).
+    #[inline]
+    pub fn handle_overflow(&self, v: i128) -> Quantized {
+        let f = &self.format;
+        let min = i128::from(f.min_code());
+        let max = i128::from(f.max_code());
+        if v >= min && v <= max {
+            if self.overflow == Overflow::SatSym && f.signed && v == min {
+                return Quantized {
+                    code: -max as i64,
+                    overflow: true,
+                };
+            }
+            return Quantized {
+                code: v as i64,
+                overflow: false,
+            };
+        }
+        let code = match self.overflow {
+            Overflow::Wrap => {
+                let w = f.total_bits();
+                if f.signed {
+                    ((v << (128 - w)) >> (128 - w)) as i64
+                } else {
+                    (v & ((1i128 << w) - 1)) as i64
+                }
+            }
+            Overflow::Sat | Overflow::Error => {
+                if v > max {
+                    max as i64
+                } else {
+                    min as i64
+                }
+            }
+            Overflow::SatZero => 0,
+            Overflow::SatSym => {
+                if v > max {
+                    max as i64
+                } else if f.signed {
+                    -max as i64
+                } else {
+                    0
+                }
+            }
+        };
+        Quantized {
+            code,
+            overflow: true,
+        }
+    }
+}
+
+/// Quantises `xs` into `out` (same length) and records every value in `stats`.
+///
+/// The recorded error is `rounded - exact` in LSBs, before overflow handling. NaN and
+/// infinite inputs count as values and overflows but do not touch range or error sums.
+pub fn quantize_slice_f64(q: &Quantizer, xs: &[f64], out: &mut [i64], stats: &mut SignalStats) {
+    assert_eq!(xs.len(), out.len(), "quantize_slice_f64: length mismatch");
+    let scale = q.format.lsb().recip();
+    for (x, o) in xs.iter().zip(out.iter_mut()) {
+        if x.is_finite() {
+            let r = q.round_f64(*x).unwrap_or(0);
+            let res = q.handle_overflow(r);
+            stats.record(x * scale, r, res.overflow);
+            *o = res.code;
+        } else {
+            let res = q.quantize_f64(*x);
+            stats.count += 1;
+            stats.overflows += 1;
+            *o = res.code;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_shift_ties() {
+        // value 5/2 and -5/2
+        let cases = [
+            (Quant::Trn, 2, -3),
+            (Quant::TrnZero, 2, -2),
+            (Quant::Rnd, 3, -2),
+            (Quant::RndZero, 2, -2),
+            (Quant::RndInf, 3, -3),
+            (Quant::RndMinInf, 2, -3),
+            (Quant::RndConv, 2, -2),
+        ];
+        for (q, p, n) in cases {
+            assert_eq!(round_shift(5, 1, q), p, "{q} +2.5");
+            assert_eq!(round_shift(-5, 1, q), n, "{q} -2.5");
+        }
+        assert_eq!(round_shift(7, 1, Quant::RndConv), 4);
+        assert_eq!(round_shift(-1, 100, Quant::Trn), -1);
+        assert_eq!(round_shift(-1, 500, Quant::Trn), -1);
+        assert_eq!(round_shift(1, 500, Quant::Rnd), 0);
+        assert_eq!(round_shift(i128::MIN, 127, Quant::Rnd), -1);
+        assert_eq!(round_shift(i128::MIN, 126, Quant::Rnd), -2);
+    }
+
+    #[test]
+    fn overflow_modes() {
+        let f = QFormat::new(true, 4, 0); // -8..=7
+        let h = |o, v| Quantizer::new(f, Quant::Trn, o).handle_overflow(v);
+        assert_eq!(
+            h(Overflow::Wrap, 8),
+            Quantized {
+                code: -8,
+                overflow: true
+            }
+        );
+        assert_eq!(
+            h(Overflow::Sat, -9),
+            Quantized {
+                code: -8,
+                overflow: true
+            }
+        );
+        assert_eq!(
+            h(Overflow::SatSym, -8),
+            Quantized {
+                code: -7,
+                overflow: true
+            }
+        );
+        assert_eq!(
+            h(Overflow::SatSym, -7),
+            Quantized {
+                code: -7,
+                overflow: false
+            }
+        );
+        assert_eq!(
+            h(Overflow::SatZero, 100),
+            Quantized {
+                code: 0,
+                overflow: true
+            }
+        );
+        assert_eq!(
+            h(Overflow::Error, 100),
+            Quantized {
+                code: 7,
+                overflow: true
+            }
+        );
+        let q = Quantizer::new(f, Quant::Trn, Overflow::Wrap);
+        // 3 * 2^200 wraps to 0 modulo 16; 3 * 2^2 = 12 wraps to -4.
+        assert_eq!(
+            q.quantize_raw(3, -200),
+            Quantized {
+                code: 0,
+                overflow: true
+            }
+        );
+        assert_eq!(
+            q.quantize_raw(3, -2),
+            Quantized {
+                code: -4,
+                overflow: true
+            }
+        );
+        assert_eq!(q.quantize_raw(-3, -125).code, 0);
+    }
+}
