@@ -291,11 +291,14 @@ impl Out<'_> {
         if t0 > t1 {
             return;
         }
-        let (ca, cb) = if t0 > 0.0 || t1 < 1.0 {
-            (lerp(&a, &b, t0), lerp(&a, &b, t1))
-        } else {
-            (a, b)
+        // A clipped end point lies on the band's edge up to rounding: snap it inside.
+        let snap = |mut v: ScreenVertex| {
+            v.x = v.x.clamp(g.x_min, g.x_max);
+            v.y = v.y.clamp(g.y_min, g.y_max);
+            v
         };
+        let ca = if t0 > 0.0 { snap(lerp(&a, &b, t0)) } else { a };
+        let cb = if t1 < 1.0 { snap(lerp(&a, &b, t1)) } else { b };
         self.prims.push(Primitive::Line {
             a: ca,
             b: cb,
