@@ -1,0 +1,41 @@
+//! Per-vertex shading in f64 (REFERENCE §5): Lambert plus Blinn-Phong.
+
+use super::vec3::{add, dot, normalize, sub};
+use super::{Light, Material};
+
+/// Linear intensity of a surface point:
+///
+/// `i = emissive + reflectance * (ambient + Σ_l I_l·max(0, n·l))
+///        + specular * Σ_l I_l·max(0, n·h)^shininess`
+///
+/// with `n` the unit normal, `l` the unit direction towards light l,
+/// `h = normalize(e + l)` and `e` the unit direction from the point to the eye. The specular
+/// term is not gated by `n·l` (as written in REFERENCE §5); when `e + l` vanishes (light
+/// exactly behind the point as seen from the eye) that light's specular term is 0.
+/// `normal` need not be unit length; light directions are expected unit (they are normalised
+/// on load).
+pub fn shade_vertex(
+    position: [f64; 3],
+    normal: [f64; 3],
+    eye: [f64; 3],
+    material: &Material,
+    ambient: f64,
+    lights: &[Light],
+) -> f64 {
+    let n = normalize(normal);
+    let e = normalize(sub(eye, position));
+    let mut diffuse = ambient;
+    let mut spec = 0.0;
+    for light in lights {
+        let l = light.direction;
+        diffuse += light.intensity * dot(n, l).max(0.0);
+        if material.specular != 0.0 {
+            let s = add(e, l);
+            if dot(s, s) > 1e-24 {
+                let h = normalize(s);
+                spec += light.intensity * dot(n, h).max(0.0).powf(material.shininess);
+            }
+        }
+    }
+    material.emissive + material.reflectance * diffuse + material.specular * spec
+}
