@@ -17,7 +17,12 @@
 //! The library prints nothing; the `igemu` binary does.
 
 pub mod calc;
+pub mod compare;
 pub mod error;
 pub mod files;
 pub mod fixed;
+pub mod hw;
+pub mod output;
+pub mod pipeline;
 pub mod scene;
+pub mod stage;

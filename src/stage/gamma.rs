@@ -1,0 +1,109 @@
+//! Gamma correction: a LUT from frame-memory code to DAC code, `U = I^(1/gamma)`
+//! (Kovalev & Tokarev eq. 7), built from the formula with the configured rounding.
+//!
+//! The float reference applies the same formula to the real-valued frame intensity
+//! (clamped to [0, 1] of full white) and quantises only at the DAC, with the same rounding.
+
+use super::{Cost, Unit};
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
+use rayon::prelude::*;
+
+/// The LUT and what it can reach.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GammaLut {
+    /// Address width (frame integer bits).
+    pub addr_bits: u32,
+    /// DAC width.
+    pub dac_bits: u32,
+    /// One DAC code per address.
+    pub table: Vec<u16>,
+}
+
+/// How the LUT maps: exponent and rounding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GammaSpec {
+    /// Exponent applied to the normalised intensity (1/gamma, or 1 without correction).
+    pub exponent: f64,
+    /// DAC quantiser (UQd.0, saturating).
+    pub dac: Quantizer,
+}
+
+impl GammaSpec {
+    /// Builds the spec; `correction = false` gives a linear LUT.
+    pub fn new(gamma: f64, correction: bool, dac_bits: u32, quant: Quant) -> Self {
+        Self {
+            exponent: if correction { 1.0 / gamma } else { 1.0 },
+            dac: Quantizer::new(QFormat::new(false, dac_bits, 0), quant, Overflow::Sat),
+        }
+    }
+
+    /// The ideal DAC value (before rounding) of a normalised intensity in [0, 1].
+    #[inline]
+    pub fn ideal(&self, v: f64) -> f64 {
+        let v = v.clamp(0.0, 1.0);
+        v.powf(self.exponent) * self.dac.format.max_code() as f64
+    }
+
+    /// The DAC code of a normalised intensity (the float reference's only rounding).
+    #[inline]
+    pub fn code(&self, v: f64) -> u16 {
+        self.dac.quantize_f64(self.ideal(v)).code as u16
+    }
+}
+
+impl GammaLut {
+    /// Builds the LUT for `addr_bits` frame bits (full white = `2^addr_bits - 1`).
+    pub fn build(spec: &GammaSpec, addr_bits: u32) -> Self {
+        let white = ((1u64 << addr_bits) - 1) as f64;
+        let table = (0..1u64 << addr_bits)
+            .map(|c| spec.code(c as f64 / white))
+            .collect();
+        Self {
+            addr_bits,
+            dac_bits: spec.dac.format.int_bits,
+            table,
+        }
+    }
+
+    /// Whether the table never decreases.
+    pub fn is_monotone(&self) -> bool {
+        self.table.windows(2).all(|w| w[0] <= w[1])
+    }
+
+    /// DAC codes no address reaches.
+    pub fn unreachable_codes(&self) -> Vec<u16> {
+        let mut seen = vec![false; 1 << self.dac_bits];
+        for &c in &self.table {
+            seen[c as usize] = true;
+        }
+        (0..seen.len())
+            .filter(|&c| !seen[c])
+            .map(|c| c as u16)
+            .collect()
+    }
+
+    /// Applies the LUT to frame codes (`frac_bits` of the frame are dropped by truncation
+    /// of the address, i.e. the LUT is addressed by the integer part).
+    pub fn apply(&self, acc: &[u32], frac_bits: u32, out: &mut [u16]) {
+        let max = self.table.len() - 1;
+        out.par_iter_mut().zip(acc.par_iter()).for_each(|(o, &a)| {
+            *o = self.table[((a >> frac_bits) as usize).min(max)];
+        });
+    }
+
+    /// Cost: one ROM.
+    pub fn cost(&self) -> Cost {
+        Cost {
+            lut_bits: self.table.len() as u64 * self.dac_bits as u64,
+            adders: vec![Unit::adder("LUT address", 1, self.addr_bits)],
+            ..Cost::default()
+        }
+    }
+}
+
+/// Float reference: frame intensity in frame LSBs (real) to DAC codes.
+pub fn apply_f64(spec: &GammaSpec, acc: &[f64], white_lsb: f64, out: &mut [u16]) {
+    out.par_iter_mut()
+        .zip(acc.par_iter())
+        .for_each(|(o, &a)| *o = spec.code(a / white_lsb));
+}

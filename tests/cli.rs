@@ -1,0 +1,213 @@
+//! The `igemu` binary: the README's commands, exit codes and error messages.
+
+use std::process::Command;
+
+fn igemu(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_igemu"))
+        .args(args)
+        .output()
+        .expect("run igemu");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn tmp(name: &str) -> String {
+    let d = std::env::temp_dir().join(format!("igemu-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name).to_string_lossy().into_owned()
+}
+
+fn write(name: &str, text: &str) -> String {
+    let p = tmp(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn render_default_scene_writes_image_and_json_report() {
+    let png = tmp("out.png");
+    let refp = tmp("ref.png");
+    let diff = tmp("diff.png");
+    let acc = tmp("acc.png");
+    let rep = tmp("report.json");
+    let (code, stdout, stderr) = igemu(&[
+        "render",
+        "-o",
+        &png,
+        "--reference-out",
+        &refp,
+        "--diff-out",
+        &diff,
+        "--dump",
+        &format!("accumulate={acc}"),
+        "--report",
+        &rep,
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("end to end"), "{stdout}");
+    for p in [&png, &refp, &diff, &acc] {
+        assert!(std::fs::metadata(p).unwrap().len() > 100, "{p}");
+    }
+    let img = image::open(&acc).unwrap();
+    assert_eq!(img.color(), image::ColorType::L16);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
+    for key in [
+        "igemu_version",
+        "scene",
+        "hardware",
+        "plan",
+        "stages",
+        "end_to_end",
+        "overflows",
+        "storage_bits",
+        "lut_bits",
+        "timing",
+    ] {
+        assert!(v.get(key).is_some(), "missing key {key}");
+    }
+    assert!(v["end_to_end"]["codes"]["identical_fraction"].is_number());
+    assert!(v["stages"][2]["fixed_ms"].is_number() && v["stages"][2]["float_ms"].is_number());
+}
+
+#[test]
+fn check_exits_1_when_a_threshold_fails_and_0_otherwise() {
+    let (code, out, _) = igemu(&["check", "--hw", "linear8", "--min-identical", "1.0"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(out.contains("FAILED"));
+    let (code, out, err) = igemu(&["check", "--max-code-diff", "255"]);
+    assert_eq!(code, 0, "{out}{err}");
+}
+
+#[test]
+fn widths_and_dof_calculators_print_the_papers_numbers() {
+    let (code, out, _) = igemu(&[
+        "widths",
+        "--contrast",
+        "100",
+        "--weber",
+        "0.02",
+        "--gamma",
+        "2.4",
+        "--json",
+    ]);
+    assert_eq!(code, 0);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["linear"]["levels"].as_f64().unwrap().round(), 4950.0);
+    assert_eq!(v["linear"]["bits"], 13);
+    assert_eq!(v["dac"]["bits"], 9);
+    let (code, out, _) = igemu(&[
+        "dof",
+        "--f-number",
+        "11",
+        "--coc",
+        "0.035",
+        "--focal",
+        "200",
+        "--distance",
+        "2500",
+    ]);
+    assert_eq!(code, 0);
+    assert!(out.contains("58.74") && out.contains("61.64"), "{out}");
+}
+
+fn expect_error(args: &[&str], needles: &[&str]) {
+    let (code, out, err) = igemu(args);
+    assert_eq!(code, 2, "args {args:?}: stdout {out} stderr {err}");
+    for n in needles {
+        assert!(err.contains(n), "args {args:?}: `{n}` not in: {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn bad_input_gets_a_message_with_file_line_field_and_range_and_exit_2() {
+    expect_error(
+        &["render", "/nonexistent/scene.toml"],
+        &["/nonexistent/scene.toml", "cannot read"],
+    );
+    let bad = write("malformed.toml", "[image\nwidth = 3\n");
+    expect_error(&["render", &bad], &["malformed.toml:1"]);
+    let hw = write(
+        "unknown.toml",
+        "[accumulate]\nfilter = \"tent\"\nbogus = 1\n",
+    );
+    expect_error(&["render", "--hw", &hw], &["unknown.toml:3", "bogus"]);
+    let hw = write("wide.toml", "[accumulate]\nframe = \"UQ40.0\"\n");
+    expect_error(&["render", "--hw", &hw], &["wide.toml:2", "1..=32"]);
+    let hw = write("lut.toml", "[accumulate]\nframe = \"UQ24.0\"\n");
+    expect_error(
+        &["render", "--hw", &hw],
+        &["lut.toml:2", "accumulate.frame", "1..=20"],
+    );
+    let hw = write("dac.toml", "[gamma]\ndac_bits = 0\n");
+    expect_error(
+        &["render", "--hw", &hw],
+        &["dac.toml:2", "gamma.dac_bits", "1..=16"],
+    );
+    let hw = write("samples.toml", "[raster]\nsamples = 3\n");
+    expect_error(
+        &["render", "--hw", &hw],
+        &["samples.toml:2", "raster.samples"],
+    );
+    let hw = write("sigma.toml", "[accumulate]\ngaussian_sigma = nan\n");
+    expect_error(
+        &["render", "--hw", &hw],
+        &["sigma.toml:2", "gaussian_sigma"],
+    );
+    expect_error(&["render", "--hw", "linear99"], &["linear99", "linear12"]);
+    expect_error(&["render", "--dump", "nothing"], &["STAGE=PATH"]);
+    expect_error(
+        &["widths", "--contrast", "0.5", "--weber", "0.02"],
+        &["contrast"],
+    );
+    expect_error(
+        &[
+            "dof",
+            "--f-number",
+            "11",
+            "--coc",
+            "0.035",
+            "--focal",
+            "-200",
+            "--distance",
+            "2500",
+        ],
+        &["focal"],
+    );
+    expect_error(
+        &["check", "--min-identical", "2"],
+        &["--min-identical", "0..=1"],
+    );
+}
+
+#[test]
+fn bad_scene_files_name_line_and_field() {
+    let cam =
+        "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nnear = 1.0\nfar = 10.0\n";
+    let p = write(
+        "zero.toml",
+        &format!("[image]\nwidth = 0\nheight = 10\nbackground = 0.0\n{cam}"),
+    );
+    expect_error(&["render", &p], &["zero.toml:2", "width"]);
+    let p = write(
+        "nan.toml",
+        &format!("[image]\nwidth = 10\nheight = 10\nbackground = nan\n{cam}"),
+    );
+    expect_error(&["render", &p], &["nan.toml:4", "background"]);
+    let p = write(
+        "huge.toml",
+        &format!("[image]\nwidth = 100000\nheight = 10\nbackground = 0.0\n{cam}"),
+    );
+    expect_error(&["render", &p], &["huge.toml:2", "width"]);
+    let p = write("camera.toml", "[image]\nwidth = 10\nheight = 10\n");
+    expect_error(&["render", &p], &["camera.toml", "camera"]);
+    let p = write(
+        "far.toml",
+        "[image]\nwidth = 10\nheight = 10\n[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nnear = 1.0\nfar = 0.5\n",
+    );
+    expect_error(&["render", &p], &["far.toml:8", "far"]);
+}

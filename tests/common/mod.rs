@@ -1,0 +1,76 @@
+//! Shared helpers of the integration tests: scenes built from TOML text, seeded randomness.
+#![allow(dead_code)]
+
+use igemu::files::TomlFile;
+use igemu::hw::HwConfig;
+use igemu::scene::Scene;
+
+/// A scene with a pinhole camera and the given `[[object]]` blocks.
+pub fn scene(width: u32, height: u32, background: f64, objects: &str) -> Scene {
+    let text = format!(
+        "[image]\nwidth = {width}\nheight = {height}\nbackground = {background}\n\n\
+         [camera]\nposition = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nfov_y_deg = 40.0\nnear = 1.0\nfar = 100.0\n\n\
+         [display]\ncontrast = 100.0\ngamma = 2.4\nweber = 0.02\nb_max = 100.0\n\n{objects}"
+    );
+    Scene::from_toml(&TomlFile::from_text("test.toml", &text))
+        .unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// A screen-space triangle block.
+pub fn tri(v: [[f64; 3]; 3], i: [f64; 3]) -> String {
+    format!(
+        "[[object]]\nkind = \"triangle\"\nspace = \"screen\"\nvertices = [[{}, {}, {}], [{}, {}, {}], [{}, {}, {}]]\nintensity = [{}, {}, {}]\n\n",
+        v[0][0],
+        v[0][1],
+        v[0][2],
+        v[1][0],
+        v[1][1],
+        v[1][2],
+        v[2][0],
+        v[2][1],
+        v[2][2],
+        i[0],
+        i[1],
+        i[2]
+    )
+}
+
+/// A screen-space light point block.
+pub fn point(x: f64, y: f64, z: f64, i: f64, size: f64) -> String {
+    format!(
+        "[[object]]\nkind = \"light_point\"\nspace = \"screen\"\nposition = [{x}, {y}, {z}]\nintensity = {i}\nsize = {size}\n\n"
+    )
+}
+
+/// A screen-space line block.
+pub fn line(a: [f64; 3], b: [f64; 3], i: f64, width: f64) -> String {
+    format!(
+        "[[object]]\nkind = \"line\"\nspace = \"screen\"\nfrom = [{}, {}, {}]\nto = [{}, {}, {}]\nintensity = {i}\nwidth = {width}\n\n",
+        a[0], a[1], a[2], b[0], b[1], b[2]
+    )
+}
+
+/// A preset with changes.
+pub fn hw(preset: &str, f: impl FnOnce(&mut HwConfig)) -> HwConfig {
+    let mut h = HwConfig::preset(preset).expect("preset");
+    f(&mut h);
+    h.validate().unwrap_or_else(|e| panic!("{e:?}"));
+    h
+}
+
+/// A small deterministic generator (xorshift64*), so tests need no extra crate.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
