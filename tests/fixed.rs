@@ -765,3 +765,33 @@ fn qformat_bad_strings() {
     assert!(QFormat::new(false, 0, 32).validate().is_ok());
     assert!(QFormat::new(false, u32::MAX, 2).validate().is_err());
 }
+
+/// The i64 fast path rounds exactly like the i128 reference, for every mode.
+#[test]
+fn round_shift_i64_equals_round_shift() {
+    use igemu::fixed::{Quant, round_shift, round_shift_i64};
+    for q in Quant::ALL {
+        for shift in 0..12u32 {
+            for raw in -5000i64..5000 {
+                assert_eq!(
+                    round_shift_i64(raw, shift, q) as i128,
+                    round_shift(raw as i128, shift, q),
+                    "{q} {shift} {raw}"
+                );
+            }
+        }
+        for raw in [
+            i64::MIN / 4,
+            i64::MAX / 4,
+            -(1 << 40) - 1,
+            (1 << 40) + (1 << 19),
+        ] {
+            for shift in [20u32, 40, 62] {
+                assert_eq!(
+                    round_shift_i64(raw, shift, q) as i128,
+                    round_shift(raw as i128, shift, q)
+                );
+            }
+        }
+    }
+}

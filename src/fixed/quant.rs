@@ -39,6 +39,33 @@ pub fn round_shift(raw: i128, shift: u32, q: Quant) -> i128 {
     floor + i128::from(up)
 }
 
+/// [`round_shift`] for the hot loops: the same rounding on `i64` (`shift` in 0..=62).
+/// Exhaustively checked against [`round_shift`] in the tests.
+#[inline]
+pub fn round_shift_i64(raw: i64, shift: u32, q: Quant) -> i64 {
+    debug_assert!(shift < 63);
+    if shift == 0 {
+        return raw;
+    }
+    let floor = raw >> shift;
+    let rem = raw & ((1i64 << shift) - 1);
+    if rem == 0 {
+        return floor;
+    }
+    let half = 1i64 << (shift - 1);
+    let up = match q {
+        Quant::Trn => false,
+        Quant::TrnZero => raw < 0,
+        _ if rem != half => rem > half,
+        Quant::Rnd => true,
+        Quant::RndZero => floor < 0,
+        Quant::RndInf => floor >= 0,
+        Quant::RndMinInf => false,
+        Quant::RndConv => floor & 1 != 0,
+    };
+    floor + i64::from(up)
+}
+
 /// A quantised code and whether the overflow mode had to act.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Quantized {

@@ -19,7 +19,7 @@ use super::raster::SampleRegion;
 use super::visibility::{BACKGROUND, Samples};
 use super::{Cost, Region, Unit};
 use crate::error::{Error, Result};
-use crate::fixed::{Overflow, Quantizer, SignalStats, round_shift};
+use crate::fixed::{Overflow, Quantizer, SignalStats, round_shift_i64};
 use crate::hw::FilterKind;
 use rayon::prelude::*;
 
@@ -190,7 +190,7 @@ impl AccParams {
             stats.record(v as f64, v, false);
             v as i64
         } else {
-            let r = round_shift(sum as i128, sh as u32, self.frame.quant);
+            let r = round_shift_i64(sum, sh as u32, self.frame.quant) as i128;
             stats.record(sum as f64 / (1u64 << sh) as f64, r, false);
             r as i64
         }
@@ -220,6 +220,33 @@ impl AccParams {
         let mut st = SignalStats::new("bg", self.frame.format);
         let part = self.product(bg_i as i64 * (1i64 << self.kernel.f), &mut st);
         Ok(self.add(0, part, &mut 0)? as u32)
+    }
+}
+
+/// Sums `w * I` per primitive over a pixel's window starting at buffer index `base`.
+fn group_window(s: &Samples, k: &Kernel, base: usize, sw: usize, frags: &mut Vec<(u32, i64)>) {
+    let mut last = usize::MAX;
+    for j in 0..k.size {
+        let row = base + j * sw;
+        for (i, &w) in k.w[j * k.size..(j + 1) * k.size].iter().enumerate() {
+            if w == 0 {
+                continue;
+            }
+            let id = s.prim[row + i];
+            let slot = if last < frags.len() && frags[last].0 == id {
+                last
+            } else {
+                match frags.iter().position(|f| f.0 == id) {
+                    Some(x) => x,
+                    None => {
+                        frags.push((id, 0));
+                        frags.len() - 1
+                    }
+                }
+            };
+            last = slot;
+            frags[slot].1 += w as i64 * s.i[row + i] as i64;
+        }
     }
 }
 
@@ -288,30 +315,24 @@ pub fn accumulate(
                 frags.clear();
                 let c0 = (px as i64 * k.n as i64 - k.off - s.reg.c0) as usize;
                 let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
-                let mut last = usize::MAX;
+                // Fast path: one scan sums w*I and checks whether a single primitive
+                // fills the window (most pixels); otherwise group by primitive.
+                let first = s.prim[r0 * sw + c0];
+                let (mut total, mut uniform) = (0i64, true);
                 for j in 0..size_w {
                     let row = (r0 + j) * sw + c0;
                     let wrow = &k.w[j * size_w..(j + 1) * size_w];
-                    for (i, &w) in wrow.iter().enumerate() {
-                        if w == 0 {
-                            continue;
-                        }
-                        let idx = row + i;
-                        let id = s.prim[idx];
-                        let slot = if last < frags.len() && frags[last].0 == id {
-                            last
-                        } else {
-                            match frags.iter().position(|f| f.0 == id) {
-                                Some(x) => x,
-                                None => {
-                                    frags.push((id, 0));
-                                    frags.len() - 1
-                                }
-                            }
-                        };
-                        last = slot;
-                        frags[slot].1 += w as i64 * s.i[idx] as i64;
+                    let ids = &s.prim[row..row + size_w];
+                    let is = &s.i[row..row + size_w];
+                    for ((&w, &id), &iv) in wrow.iter().zip(ids).zip(is) {
+                        total += w as i64 * iv as i64;
+                        uniform &= id == first;
                     }
+                }
+                if uniform {
+                    frags.push((first, total));
+                } else {
+                    group_window(s, k, r0 * sw + c0, sw, &mut frags);
                 }
                 out.work.macs += (size_w * size_w) as u64;
                 frags.sort_unstable_by_key(|f| f.0);

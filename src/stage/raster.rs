@@ -12,7 +12,7 @@
 use super::Grid;
 use super::input::QPrim;
 use super::setup::{Edge, PointSetup, Setup, TriSetup};
-use crate::fixed::{Quant, round_shift};
+use crate::fixed::{Quant, round_shift_i64};
 
 /// The rectangle of samples a render keeps, half-open, in global sample coordinates
 /// (may extend past the screen by the filter's apron).
@@ -108,7 +108,7 @@ pub struct RasterParams {
 
 #[inline]
 fn out_code(v: i64, p: &RasterParams, max: i64, clamped: &mut u64) -> u32 {
-    let c = round_shift(v as i128, p.guard, p.quant) as i64;
+    let c = round_shift_i64(v, p.guard, p.quant);
     if c < 0 || c > max {
         *clamped += 1;
         c.clamp(0, max) as u32

@@ -6,7 +6,7 @@
 //! added to the frame by the accumulate stage, as light points are in image generators.
 
 use super::raster::{Frag, FragF, SampleRegion};
-use crate::fixed::{Quant, round_shift};
+use crate::fixed::{Quant, round_shift_i64};
 
 /// Primitive id of the background (samples no surface covered).
 pub const BACKGROUND: u32 = 0;
@@ -78,8 +78,8 @@ impl ZConvert {
     /// Converts one depth code; counts a clamp at the top of the range.
     #[inline]
     pub fn apply(&self, z: u32, clamped: &mut u64) -> u32 {
-        let v = round_shift(z as i128, self.shift, self.quant);
-        if v > self.max as i128 {
+        let v = round_shift_i64(z as i64, self.shift, self.quant);
+        if v > self.max as i64 {
             *clamped += 1;
             self.max
         } else {
