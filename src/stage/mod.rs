@@ -95,7 +95,7 @@ impl LocalError {
     pub fn add(&mut self, fixed: f64, float: f64) {
         let d = fixed - float;
         self.values += 1;
-        if (float.round() - fixed).abs() < 0.5 && (d.abs() <= 0.5) {
+        if float.round() == fixed {
             self.identical += 1;
         }
         self.max_abs_lsb = self.max_abs_lsb.max(d.abs());
