@@ -610,12 +610,15 @@ impl Sim {
     }
 }
 
+/// Receives every cycle: the cycle, each stage's state and each stage's FIFO occupancy.
+pub type Trace<'a> = dyn FnMut(u64, &[State], &[u32]) + 'a;
+
 /// Runs the cycle-counting simulation; `trace` receives every cycle's stage states and
 /// FIFO occupancies (for the VCD writer).
 pub fn simulate(
     w: &Workload,
     c: &CyclesCfg,
-    mut trace: Option<&mut dyn FnMut(u64, &[State], &[u32])>,
+    mut trace: Option<&mut Trace>,
 ) -> SimResult {
     let (services, port_bound) = w.services(c);
     let items = w.items();
@@ -846,7 +849,7 @@ pub fn report(
     planned: &[String],
     refresh_hz: f64,
     cost: cost::CostSummary,
-    trace: Option<&mut dyn FnMut(u64, &[State], &[u32])>,
+    trace: Option<&mut Trace>,
 ) -> CycleReport {
     let t = Instant::now();
     let r = simulate(w, c, trace);
