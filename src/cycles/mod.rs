@@ -615,11 +615,7 @@ pub type Trace<'a> = dyn FnMut(u64, &[State], &[u32]) + 'a;
 
 /// Runs the cycle-counting simulation; `trace` receives every cycle's stage states and
 /// FIFO occupancies (for the VCD writer).
-pub fn simulate(
-    w: &Workload,
-    c: &CyclesCfg,
-    mut trace: Option<&mut Trace>,
-) -> SimResult {
+pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> SimResult {
     let (services, port_bound) = w.services(c);
     let items = w.items();
     let mut sims: Vec<Sim> = CYCLE_STAGES
