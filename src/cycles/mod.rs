@@ -518,7 +518,7 @@ impl Workload {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
 pub enum State {
-    /// No token left to serve (or none yet in a chain that has not started... see `Starved`).
+    /// Every token served (its pipeline may still drain); nothing left to do.
     Idle = 0,
     /// Serving a token.
     Busy = 1,
