@@ -115,6 +115,8 @@ pub struct HwConfig {
     pub accumulate: AccumulateCfg,
     /// Gamma LUT.
     pub gamma: GammaCfg,
+    /// Timing of the stages for the cycle model (`[cycles]`).
+    pub cycles: crate::cycles::CyclesCfg,
 }
 
 const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Quantizer {
@@ -159,6 +161,7 @@ impl HwConfig {
                 gamma: None,
                 correction: true,
             },
+            cycles: crate::cycles::CyclesCfg::default_for(acc_bits),
         })
     }
 
@@ -242,6 +245,9 @@ impl HwConfig {
                 hw.gamma.gamma = g.gamma;
             }
             set(&mut hw.gamma.correction, g.correction);
+        }
+        if let Some(c) = raw.cycles {
+            c.apply(&mut hw.cycles);
         }
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
@@ -377,6 +383,7 @@ impl HwConfig {
                 format!("must be a finite number in (0, 5], got {g}"),
             );
         }
+        self.cycles.validate()?;
         Ok(())
     }
 
@@ -401,6 +408,7 @@ struct RawHw {
     visibility: Option<RawVisibility>,
     accumulate: Option<RawAccumulate>,
     gamma: Option<RawGamma>,
+    cycles: Option<crate::cycles::RawCycles>,
 }
 
 #[derive(Deserialize)]

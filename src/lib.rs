@@ -18,6 +18,7 @@
 
 pub mod calc;
 pub mod compare;
+pub mod cycles;
 pub mod error;
 pub mod files;
 pub mod fixed;

@@ -30,6 +30,23 @@ enum Cmd {
     Widths(WidthsArgs),
     /// Depth of field of a thin lens: front and back depth, near and far limits.
     Dof(DofArgs),
+    /// Cycle-count a frame on the scene's real workload: bottleneck, frame rate, real-time check, cost.
+    Cycles(CyclesArgs),
+}
+
+#[derive(Args)]
+struct CyclesArgs {
+    #[command(flatten)]
+    s: SceneArgs,
+    /// Clock frequency in MHz (default: the hardware file's cycles.clock_mhz).
+    #[arg(long)]
+    clock_mhz: Option<f64>,
+    /// Write a VCD trace of stage states and FIFO occupancy (for GTKWave).
+    #[arg(long)]
+    vcd: Option<String>,
+    /// Print the cycle report as JSON.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args)]
@@ -162,6 +179,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
     match cli.cmd {
         Cmd::Render(a) => render(a),
         Cmd::Check(a) => check(a),
+        Cmd::Cycles(a) => cycles(a),
         Cmd::Widths(a) => {
             let w =
                 calc::widths(a.contrast, a.weber, a.gamma).map_err(|m| arg_error("widths", m))?;
@@ -342,6 +360,174 @@ fn check(a: CheckArgs) -> Result<ExitCode, Error> {
     })
 }
 
+fn cycles(a: CyclesArgs) -> Result<ExitCode, Error> {
+    use igemu::cycles::{self, vcd::VcdWriter};
+    let scene = load_scene(a.s.scene.as_deref())?;
+    let mut hw = HwConfig::resolve(a.s.hw.as_deref())?;
+    if let Some(mhz) = a.clock_mhz {
+        cycles::check_clock(mhz)?;
+        hw.cycles.clock_mhz = mhz;
+    }
+    let r = pipeline::render(&scene, &hw, RenderOptions { stage_local: false })?;
+    let mut c = r.report.cycles.clone();
+    if let Some(path) = &a.vcd {
+        let io = |e: std::io::Error| Error::Io {
+            path: path.clone(),
+            source: e,
+        };
+        let file = std::fs::File::create(path).map_err(io)?;
+        let fifo: Vec<bool> = (0..cycles::CYCLE_STAGES.len())
+            .map(|i| i != 3 && i != 5)
+            .collect();
+        let mut w = VcdWriter::new(std::io::BufWriter::new(file), &fifo, hw.cycles.clock_mhz)
+            .map_err(io)?;
+        let planned = c.plan.stages.clone();
+        let cost = c.cost.clone();
+        c = cycles::report(
+            &r.workload,
+            &hw.cycles,
+            &planned,
+            scene.display.refresh_hz,
+            cost,
+            Some(&mut |t, st: &[cycles::State], occ: &[u32]| w.cycle(t, st, occ)),
+        );
+        w.finish(c.total_cycles).map_err(io)?;
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&c).expect("serialisable")
+        );
+    } else {
+        println!(
+            "igemu {} cycles | scene `{}` {}x{} | hardware `{}`",
+            r.report.igemu_version,
+            r.report.scene.name,
+            r.report.scene.width,
+            r.report.scene.height,
+            r.report.hardware.name
+        );
+        print_cycles(&c);
+        if let Some(p) = &a.vcd {
+            println!("wrote {p}");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_cycles(c: &igemu::cycles::CycleReport) {
+    let p = &c.plan;
+    println!(
+        "plan: {} | tiles {}x{} px: {} of {} touched | pixels simulated {} of {} ({:.1}%){}",
+        p.stages.join(" -> "),
+        p.tile,
+        p.tile,
+        p.tiles_touched,
+        p.tiles_total,
+        p.pixels_simulated,
+        p.pixels_total,
+        100.0 * p.pixels_simulated as f64 / p.pixels_total.max(1) as f64,
+        if p.unmodelled.is_empty() {
+            String::new()
+        } else {
+            format!(" | no cycle model: {}", p.unmodelled.join(", "))
+        }
+    );
+    println!(
+        "{:<11} {:>5} {:>4} {:>3} {:>5} {:>8} {:>12} {:>10} {:>10} {:>10} {:>9}  item",
+        "stage",
+        "lanes",
+        "lat",
+        "ii",
+        "fifo",
+        "tokens",
+        "items",
+        "busy",
+        "stalled",
+        "starved",
+        "fifo max"
+    );
+    for s in &c.stages {
+        println!(
+            "{:<11} {:>5} {:>4} {:>3} {:>5} {:>8} {:>12} {:>10} {:>10} {:>10} {:>9}  {}",
+            s.name,
+            s.lanes,
+            s.latency,
+            s.ii,
+            s.fifo,
+            s.tokens,
+            s.items,
+            s.busy,
+            s.stalled,
+            s.starved,
+            s.fifo_max,
+            s.item
+        );
+    }
+    let t = &c.throughput;
+    println!(
+        "frame: {} cycles | bottleneck {} | bounds {} <= {} <= {} {} | frame-port-bound cycles {}",
+        c.total_cycles,
+        c.bottleneck,
+        c.lower_bound,
+        c.total_cycles,
+        c.upper_bound,
+        if c.bounds_hold { "hold" } else { "VIOLATED" },
+        c.frame_port_bound_cycles
+    );
+    println!(
+        "at {} MHz: {:.3} ms/frame, {:.1} fps, {:.2} Mpixel/s | display needs {} Hz = {:.2} Mpixel/s: {}",
+        t.clock_mhz,
+        t.frame_ms,
+        t.fps,
+        t.pixel_rate / 1e6,
+        t.refresh_hz,
+        t.required_pixel_rate / 1e6,
+        if t.real_time {
+            "real time"
+        } else {
+            "NOT real time"
+        }
+    );
+    let k = &c.cost;
+    let list = |m: &std::collections::BTreeMap<String, u64>| {
+        m.iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    println!(
+        "cost: RAM {} bits ({}) | ROM {} bits ({}) | {} adders ({} bits) | {} multipliers ({} bit-products)",
+        k.total_storage_bits,
+        list(&k.storage_bits),
+        k.total_rom_bits,
+        list(&k.rom_bits),
+        k.adders,
+        k.adder_bits,
+        k.multipliers,
+        k.multiplier_bit_products
+    );
+    let packed: Vec<String> = k
+        .packed
+        .iter()
+        .map(|p| {
+            format!(
+                "{} {} bits {}",
+                p.name,
+                p.bits,
+                if p.verified { "ok" } else { "MISMATCH" }
+            )
+        })
+        .collect();
+    println!("packed with bitvec and read back: {}", packed.join(", "));
+    println!(
+        "simulator: {} cycles in {:.2} ms = {:.1} M cycles/s",
+        c.total_cycles,
+        c.sim.wall_ms,
+        c.sim.cycles_per_s / 1e6
+    );
+}
+
 fn fmt_work(w: &std::collections::BTreeMap<String, u64>) -> String {
     w.iter()
         .filter(|(_, v)| **v > 0)
@@ -437,5 +623,7 @@ fn print_report(r: &Report, out: &str) {
         r.lut_bits,
         r.overflows
     );
+    println!();
+    print_cycles(&r.cycles);
     println!("wrote {out}");
 }

@@ -95,6 +95,8 @@ pub struct Report {
     pub lut_bits: u64,
     /// Timing.
     pub timing: Timing,
+    /// Cycle model, throughput and cost summary.
+    pub cycles: crate::cycles::CycleReport,
 }
 
 /// Everything a render produces.
@@ -111,6 +113,8 @@ pub struct Render {
     pub frame_ref: Vec<f64>,
     /// DAC width.
     pub dac_bits: u32,
+    /// The cycle model's token streams (to re-simulate with other timings or a VCD trace).
+    pub workload: crate::cycles::Workload,
 }
 
 /// Options of a render.
@@ -350,6 +354,8 @@ pub struct Geometry {
     pub points_ref: Vec<PointFrags<f64>>,
     /// Setup, raster and visibility reports.
     pub reports: [StageReport; 3],
+    /// Per-primitive work in processing order (the cycle model's token stream).
+    pub prim_work: Vec<crate::cycles::PrimWork>,
 }
 
 /// Runs phase 2: setup, raster and visibility, fixed and float.
@@ -414,11 +420,18 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
     let mut ffr: Vec<FragF> = Vec::new();
     let mut exact: Vec<FragF> = Vec::new();
     let mut point_ids = Vec::new();
+    let mut prim_work = Vec::with_capacity(setups.len());
+    let vertices = |p: &QPrim| match p {
+        QPrim::Triangle(_) => 3,
+        QPrim::Line { .. } => 2,
+        QPrim::Point { .. } => 1,
+    };
     for (idx, s) in setups.iter().enumerate() {
         if matches!(s, Setup::Point(_)) {
             point_ids.push(idx);
             continue;
         }
+        let before = (rw.samples + rw.walked, vw.tests);
         frags.clear();
         let t = Instant::now();
         raster::raster(s, &rp, &sreg, &mut frags, &mut rw);
@@ -426,6 +439,11 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
         let t = Instant::now();
         visibility::resolve(&frags, idx as u32 + 1, &zc, &mut samples, &mut vw);
         r_vis.fixed_ms += ms_since(t);
+        prim_work.push(crate::cycles::PrimWork {
+            vertices: vertices(&f.qprims[idx]),
+            stepped: rw.samples + rw.walked - before.0,
+            tests: vw.tests - before.1,
+        });
         if let Some(sh) = shadow.as_mut() {
             ffr.clear();
             raster::raster_f64(
@@ -449,6 +467,7 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
     }
     let mut points = Vec::new();
     for &idx in &point_ids {
+        let before = (rw.samples + rw.walked, vw.point_tests);
         frags.clear();
         let t = Instant::now();
         raster::raster(&setups[idx], &rp, &sreg, &mut frags, &mut rw);
@@ -456,6 +475,11 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
         let t = Instant::now();
         let vis = visibility::point_visible(&frags, &zc, &samples, &mut vw);
         r_vis.fixed_ms += ms_since(t);
+        prim_work.push(crate::cycles::PrimWork {
+            vertices: 1,
+            stepped: rw.samples + rw.walked - before.0,
+            tests: vw.point_tests - before.1,
+        });
         let i = match f.qprims[idx] {
             QPrim::Point { v, .. } => v.i.clamp(0, i_fmt.max_code()) as u32,
             _ => 0,
@@ -561,6 +585,7 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
         samples_ref,
         points_ref,
         reports: [r_setup, r_raster, r_vis],
+        prim_work,
     })
 }
 
@@ -572,6 +597,10 @@ pub struct Accumulated {
     pub frame_ref: Vec<f64>,
     /// Accumulate report.
     pub report: StageReport,
+    /// The plan's touched tiles (the fixed model computed only these).
+    pub tiles: crate::cycles::Tiles,
+    /// Frame read-modify-writes per tile.
+    pub tile_rmw: Vec<u64>,
 }
 
 /// Runs phase 3: filtering and accumulation, fixed and float.
@@ -591,8 +620,24 @@ pub fn accumulate_phase(
     };
     let mut r = stage("accumulate");
     let t = Instant::now();
-    let (frame, aw, acc_stats) =
-        accumulate::accumulate(&g.samples, &f.region, &g.points, &ap, f.bg.0, size)?;
+    let tiles = crate::cycles::Tiles::touched_by(
+        hw.cycles.tile,
+        &f.region,
+        &f.kernel,
+        &g.samples,
+        &g.points,
+        size.0,
+        size.1,
+    );
+    let (frame, aw, acc_stats, tile_rmw) = accumulate::accumulate_tiles(
+        &g.samples,
+        &f.region,
+        Some(&tiles),
+        &g.points,
+        &ap,
+        f.bg.0,
+        size,
+    )?;
     r.fixed_ms = ms_since(t);
     for (k, v) in [
         ("pixels", aw.pixels),
@@ -642,6 +687,8 @@ pub fn accumulate_phase(
         frame,
         frame_ref,
         report: r,
+        tiles,
+        tile_rmw,
     })
 }
 
@@ -727,6 +774,24 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Rende
         .sum();
     let storage_bits = stages.iter().map(|s| s.cost.storage_bits).sum();
     let lut_bits = stages.iter().map(|s| s.cost.lut_bits).sum();
+    let workload = crate::cycles::Workload::new(
+        g.prim_work,
+        &a.tiles,
+        &f.region,
+        f.kernel.size,
+        &a.tile_rmw,
+        hw.accumulate.frame.format.total_bits(),
+    );
+    let packed = pack_checks(f.qprims.len(), &g.samples, &a.frame, scene, hw);
+    let planned: Vec<String> = stages.iter().map(|s| s.name.clone()).collect();
+    let cycles = crate::cycles::report(
+        &workload,
+        &hw.cycles,
+        &planned,
+        scene.display.refresh_hz,
+        crate::cycles::cost::summarize(&stages, packed),
+        None,
+    );
     let timing = Timing {
         host_ms: f.host_ms,
         fixed_ms: stages.iter().map(|s| s.fixed_ms).sum(),
@@ -755,6 +820,7 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Rende
         storage_bits,
         lut_bits,
         timing,
+        cycles,
     };
     Ok(Render {
         report,
@@ -763,7 +829,62 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Rende
         frame: a.frame,
         frame_ref: a.frame_ref,
         dac_bits: hw.gamma.dac_bits,
+        workload,
     })
+}
+
+/// Packs the frame memory, the gamma ROM and the modelled region of the sample buffer with
+/// `bitvec` at their computed sizes and reads them back. An empty sample slot ("nothing",
+/// `u32::MAX` in the model) is stored as the far code (all ones) with the background id.
+fn pack_checks(
+    prims: usize,
+    s: &Samples,
+    frame: &Frame,
+    scene: &Scene,
+    hw: &HwConfig,
+) -> Vec<crate::cycles::cost::PackCheck> {
+    use crate::cycles::cost::pack;
+    let fb = hw.accumulate.frame.format.total_bits();
+    let mut out = vec![pack(
+        "frame memory",
+        frame.acc.len(),
+        &[fb],
+        frame.acc.len() as u64 * fb as u64,
+        |r, _| frame.acc[r] as u64,
+    )];
+    let spec = GammaSpec::new(
+        hw.gamma.gamma.unwrap_or(scene.display.gamma),
+        hw.gamma.correction,
+        hw.gamma.dac_bits,
+        hw.gamma.quant,
+    );
+    let lut = GammaLut::build(&spec, hw.accumulate.frame.format.int_bits);
+    out.push(pack(
+        "gamma ROM",
+        lut.table.len(),
+        &[hw.gamma.dac_bits],
+        lut.cost().lut_bits,
+        |r, _| lut.table[r] as u64,
+    ));
+    let zb = hw.visibility.z.format.total_bits();
+    let ib = hw.input.intensity.format.total_bits();
+    let id_bits = (prims as u64 + 1)
+        .next_power_of_two()
+        .trailing_zeros()
+        .max(1);
+    let zmax = hw.visibility.z.format.max_code() as u64;
+    out.push(pack(
+        "sample buffer (modelled region)",
+        s.z.len(),
+        &[zb, ib, id_bits],
+        s.z.len() as u64 * (zb + ib + id_bits) as u64,
+        |r, k| match k {
+            0 => (s.z[r] as u64).min(zmax),
+            1 => s.i[r] as u64,
+            _ => s.prim[r] as u64,
+        },
+    ));
+    out
 }
 
 /// The background's intensity code (quantised like a vertex intensity).

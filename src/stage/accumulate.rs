@@ -276,6 +276,7 @@ struct RowOut {
     cov: Vec<u16>,
     stats: SignalStats,
     work: AccWork,
+    tile_rmw: Vec<u64>,
 }
 
 /// Fixed model: accumulates every pixel of `region`; the rest is background.
@@ -287,6 +288,23 @@ pub fn accumulate(
     bg_i: u32,
     size: (u32, u32),
 ) -> Result<(Frame, AccWork, Vec<SignalStats>)> {
+    accumulate_tiles(s, region, None, points, p, bg_i, size).map(|(f, w, st, _)| (f, w, st))
+}
+
+/// Fixed model limited to the touched tiles of `region` (all of it with `None`): a pixel
+/// of an untouched tile sees only background samples, so it takes the background code
+/// (the kernel's weights sum to exactly `2^f`, so the result is the same bit for bit).
+/// Also returns the frame read-modify-writes (fragments and point updates) per tile
+/// (empty with `None`).
+pub fn accumulate_tiles(
+    s: &Samples,
+    region: &Region,
+    tiles: Option<&crate::cycles::Tiles>,
+    points: &[PointFrags<u32>],
+    p: &AccParams,
+    bg_i: u32,
+    size: (u32, u32),
+) -> Result<(Frame, AccWork, Vec<SignalStats>, Vec<u64>)> {
     let (width, height) = size;
     let npix = width as usize * height as usize;
     let bg = p.background_code(bg_i)?;
@@ -309,9 +327,19 @@ pub fn accumulate(
                 cov: Vec::with_capacity((region.x1 - region.x0) as usize),
                 stats: SignalStats::new("accumulate.product", p.frame.format),
                 work: AccWork::default(),
+                tile_rmw: vec![0; tiles.map_or(0, |t| t.cols as usize)],
             };
             let mut frags: Vec<(u32, i64)> = Vec::with_capacity(16);
             for px in region.x0..region.x1 {
+                if let Some(t) = tiles
+                    && !t.is_touched(px, py)
+                {
+                    out.acc.push(bg);
+                    out.depth.push(u32::MAX);
+                    out.cov.push(0);
+                    continue;
+                }
+                out.work.pixels += 1;
                 frags.clear();
                 let c0 = (px as i64 * k.n as i64 - k.off - s.reg.c0) as usize;
                 let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
@@ -342,6 +370,9 @@ pub fn accumulate(
                     acc = p.add(acc, part, &mut out.work.overflows)?;
                 }
                 out.work.fragments += frags.len() as u64;
+                if let Some(t) = tiles {
+                    out.tile_rmw[(px / t.size) as usize] += frags.len() as u64;
+                }
                 // Depth and coverage of the pixel's own samples.
                 let (mut zmin, mut cov) = (u32::MAX, 0u16);
                 let own0 = (r0 + k.off as usize) * sw + c0 + k.off as usize;
@@ -358,15 +389,21 @@ pub fn accumulate(
                 out.depth.push(zmin);
                 out.cov.push(cov);
             }
-            out.work.pixels += (region.x1 - region.x0) as u64;
             Ok(out)
         })
         .collect();
     let mut work = AccWork::default();
     let mut stats = SignalStats::new("accumulate.product", p.frame.format);
     let mut frame_stats = SignalStats::new("accumulate.frame", p.frame.format);
+    let mut tile_rmw = vec![0u64; tiles.map_or(0, |t| t.touched.len())];
     for (py, r) in (region.y0..region.y1).zip(rows) {
         let r = r?;
+        if let Some(t) = tiles {
+            let row0 = (py / t.size * t.cols) as usize;
+            for (c, &v) in r.tile_rmw.iter().enumerate() {
+                tile_rmw[row0 + c] += v;
+            }
+        }
         let base = py as usize * width as usize + region.x0 as usize;
         let len = r.acc.len();
         frame.acc[base..base + len].copy_from_slice(&r.acc);
@@ -386,13 +423,16 @@ pub fn accumulate(
             let at = py as usize * width as usize + px as usize;
             frame.acc[at] = p.add(frame.acc[at] as i64, part, &mut work.overflows)? as u32;
             work.point_updates += 1;
+            if let Some(t) = tiles {
+                tile_rmw[t.index(px, py)] += 1;
+            }
         }
     }
     for &a in &frame.acc {
         frame_stats.record_code(a as i128);
     }
     frame_stats.add_overflows(work.overflows);
-    Ok((frame, work, vec![stats, frame_stats]))
+    Ok((frame, work, vec![stats, frame_stats], tile_rmw))
 }
 
 /// For a light point: each pixel of the region it touches with the summed filter weight

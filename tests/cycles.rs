@@ -1,0 +1,429 @@
+//! Cycle model: a hand-computed single triangle, analytic bounds on random scenes, timing
+//! invariance of every output code, the VCD trace read back, the plan (no dof for a pinhole
+//! camera, only the touched quarter of the screen), tile skipping bit-identical to the
+//! whole-region accumulate, and the cost model's packing check.
+
+mod common;
+
+use common::{Rng, hw, point, scene, tri};
+use igemu::cycles::vcd::VcdWriter;
+use igemu::cycles::{self, CYCLE_STAGES, CyclesCfg, StageTiming, State};
+use igemu::files::TomlFile;
+use igemu::hw::HwConfig;
+use igemu::pipeline::{self, Render, RenderOptions, render};
+use igemu::scene::{Lens, Scene};
+use igemu::stage::accumulate::{self, AccParams};
+use proptest::prelude::*;
+
+fn run(s: &Scene, h: &HwConfig) -> Render {
+    render(s, h, RenderOptions { stage_local: false }).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn work(r: &Render, stage: &str, key: &str) -> u64 {
+    let s = r.report.stages.iter().find(|s| s.name == stage).unwrap();
+    s.work.get(key).copied().unwrap_or(0)
+}
+
+fn random_scene(rng: &mut Rng, w: u32, h: u32, n: usize) -> Scene {
+    let mut objs = String::new();
+    for _ in 0..n {
+        let (cx, cy) = (
+            rng.range(-10.0, w as f64 + 10.0),
+            rng.range(-10.0, h as f64 + 10.0),
+        );
+        let r = rng.range(1.0, 30.0);
+        let v = [0, 1, 2].map(|_| {
+            [
+                cx + rng.range(-r, r),
+                cy + rng.range(-r, r),
+                rng.range(0.05, 0.95),
+            ]
+        });
+        objs += &tri(v, [0, 1, 2].map(|_| rng.range(0.0, 1.0)));
+    }
+    if rng.range(0.0, 1.0) < 0.5 {
+        objs += &point(
+            rng.range(0.0, w as f64),
+            rng.range(0.0, h as f64),
+            0.5,
+            rng.range(0.2, 1.0),
+            1.0,
+        );
+    }
+    scene(w, h, rng.range(0.0, 0.3), &objs)
+}
+
+fn random_timing(rng: &mut Rng) -> CyclesCfg {
+    let mut c = CyclesCfg::default_for(12);
+    for name in CYCLE_STAGES {
+        let t = c.timing_mut(name).unwrap();
+        *t = StageTiming {
+            lanes: 1 + (rng.next_u64() % 16) as u32,
+            latency: (rng.next_u64() % 20) as u32,
+            ii: 1 + (rng.next_u64() % 3) as u32,
+            fifo: 1 + (rng.next_u64() % 8) as u32,
+        };
+    }
+    c.frame_port_bits = 1 + (rng.next_u64() % 96) as u32;
+    c
+}
+
+#[test]
+fn single_triangle_cycle_count_matches_hand_computation() {
+    // One triangle well inside tile (2, 2) of a 16-px grid: one geometry token, one tile.
+    let s = scene(
+        96,
+        96,
+        0.1,
+        &tri(
+            [[36.0, 36.0, 0.5], [43.0, 37.0, 0.5], [38.0, 43.0, 0.5]],
+            [0.8, 0.5, 0.2],
+        ),
+    );
+    let h = hw("linear12", |h| {
+        h.cycles.input = StageTiming {
+            lanes: 1,
+            latency: 4,
+            ii: 1,
+            fifo: 2,
+        };
+        h.cycles.setup = StageTiming {
+            lanes: 1,
+            latency: 16,
+            ii: 4,
+            fifo: 2,
+        };
+        h.cycles.raster = StageTiming {
+            lanes: 4,
+            latency: 3,
+            ii: 1,
+            fifo: 2,
+        };
+        h.cycles.visibility = StageTiming {
+            lanes: 2,
+            latency: 2,
+            ii: 1,
+            fifo: 2,
+        };
+        h.cycles.accumulate = StageTiming {
+            lanes: 16,
+            latency: 6,
+            ii: 2,
+            fifo: 2,
+        };
+        h.cycles.gamma = StageTiming {
+            lanes: 1,
+            latency: 1,
+            ii: 1,
+            fifo: 2,
+        };
+        h.cycles.frame_port_bits = 24;
+    });
+    let r = run(&s, &h);
+    let c = &r.report.cycles;
+    assert_eq!(c.plan.tiles_touched, 1);
+    assert_eq!(c.plan.tiles_total, 36);
+    // The work the stages reported.
+    let stepped = work(&r, "raster", "samples") + work(&r, "raster", "walked_samples");
+    let tests = work(&r, "visibility", "tests");
+    let pixels = work(&r, "accumulate", "pixels");
+    let macs = work(&r, "accumulate", "macs");
+    let rmw = work(&r, "accumulate", "fragments") + work(&r, "accumulate", "point_updates");
+    assert!(stepped > 0 && tests > 0 && pixels > 0);
+    // Tent filter on a 4x4 grid: an 8x8-sample window, 64 MACs per pixel.
+    assert_eq!(macs, pixels * 64);
+    // By hand: each stage serves its one token for ceil(items / lanes) * ii cycles, then
+    // the token spends `latency` cycles in the stage's pipeline; nothing overlaps.
+    let input = 3 + 4; // 3 vertices, 1 lane, ii 1; latency 4
+    let setup = 4 + 16; // 1 primitive, ii 4; latency 16
+    let raster = stepped.div_ceil(4) + 3;
+    let vis = tests.div_ceil(2) + 2;
+    // Accumulate: the MAC lanes (ii 2) or the frame port (2 x 12 bits per RMW, 24 bits per
+    // clock: one RMW per clock), whichever is slower; latency 6.
+    let acc = (macs.div_ceil(16) * 2).max(rmw * 24 / 24) + 6;
+    let gamma = pixels + 1;
+    let hand = input + setup + raster + vis + acc + gamma;
+    assert_eq!(c.total_cycles, hand, "{c:#?}");
+    assert_eq!(c.upper_bound, hand);
+    // Nobody stalls with one token; the raster stage waits for input and setup.
+    assert!(c.stages.iter().all(|s| s.stalled == 0));
+    assert_eq!(c.stages[2].starved, input + setup);
+    assert_eq!(c.stages[2].busy, stepped.div_ceil(4));
+}
+
+#[test]
+fn analytic_bounds_hold_on_random_scenes() {
+    let mut rng = Rng(0x5eed_c7c1e5);
+    for case in 0..6 {
+        let s = random_scene(&mut rng, 96, 64, 1 + case * 3);
+        let r = run(&s, &HwConfig::default_config());
+        for _ in 0..25 {
+            let c = random_timing(&mut rng);
+            let (services, _) = r.workload.services(&c);
+            let sim = cycles::simulate(&r.workload, &c, None);
+            let (lo, hi) = sim.bounds();
+            assert!(
+                lo <= sim.total_cycles && sim.total_cycles <= hi,
+                "case {case}: {lo} <= {} <= {hi}\n{c:?}",
+                sim.total_cycles
+            );
+            for (st, sv) in sim.stages.iter().zip(&services) {
+                assert_eq!(st.busy, sv.iter().sum::<u64>(), "{}", st.name);
+                assert_eq!(
+                    st.busy + st.stalled + st.starved + st.idle,
+                    sim.total_cycles,
+                    "{}",
+                    st.name
+                );
+                assert!(st.fifo == 0 || st.fifo_max <= st.fifo);
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+    /// Lanes, latencies, initiation intervals, FIFO depths, the port and the tile size
+    /// change cycle counts only, never an output code.
+    #[test]
+    fn timing_never_changes_an_output_code(seed in any::<u64>()) {
+        let mut rng = Rng(seed | 1);
+        let s = random_scene(&mut rng, 80, 56, 6);
+        let base = run(&s, &HwConfig::default_config());
+        let mut h = HwConfig::default_config();
+        h.cycles = random_timing(&mut rng);
+        h.cycles.tile = [4, 8, 16, 32, 64][(rng.next_u64() % 5) as usize];
+        h.validate().unwrap();
+        let other = run(&s, &h);
+        prop_assert_eq!(&base.dac, &other.dac);
+        prop_assert_eq!(&base.frame, &other.frame);
+        prop_assert_eq!(&base.dac_ref, &other.dac_ref);
+        prop_assert!(other.report.cycles.bounds_hold);
+    }
+}
+
+#[test]
+fn tile_skipping_is_bit_identical_to_the_whole_region() {
+    let mut rng = Rng(77);
+    let mut scenes = vec![Scene::default_scene()];
+    scenes.extend((0..4).map(|i| random_scene(&mut rng, 120, 90, 2 + 4 * i)));
+    for s in &scenes {
+        let h = HwConfig::default_config();
+        let f = pipeline::front(s, &h).unwrap();
+        let g = pipeline::geometry(&f, &h, RenderOptions { stage_local: false }).unwrap();
+        let a =
+            pipeline::accumulate_phase(&f, &g, &h, RenderOptions { stage_local: false }).unwrap();
+        let ap = AccParams {
+            kernel: f.kernel.clone(),
+            i_frac: h.input.intensity.format.frac_bits,
+            frame: h.accumulate.frame,
+        };
+        let (whole, _, _) = accumulate::accumulate(
+            &g.samples,
+            &f.region,
+            &g.points,
+            &ap,
+            f.bg.0,
+            (s.image.width, s.image.height),
+        )
+        .unwrap();
+        assert_eq!(whole, a.frame, "scene {}", s.name);
+    }
+}
+
+#[test]
+fn vcd_trace_reads_back_to_the_reported_counts() {
+    let mut rng = Rng(4242);
+    let s = random_scene(&mut rng, 64, 48, 8);
+    let mut h = HwConfig::default_config();
+    h.cycles = random_timing(&mut rng);
+    h.cycles.raster.fifo = 1; // force back-pressure
+    let r = run(&s, &h);
+    let fifo: Vec<bool> = (0..CYCLE_STAGES.len()).map(|i| i != 3 && i != 5).collect();
+    let mut w = VcdWriter::new(Vec::new(), &fifo, h.cycles.clock_mhz).unwrap();
+    let sim = cycles::simulate(
+        &r.workload,
+        &h.cycles,
+        Some(&mut |t, st: &[State], occ: &[u32]| w.cycle(t, st, occ)),
+    );
+    assert_eq!(sim.total_cycles, r.report.cycles.total_cycles);
+    let bytes = w.finish(sim.total_cycles).unwrap();
+
+    let mut p = vcd::Parser::new(std::io::BufReader::new(&bytes[..]));
+    let header = p.parse_header().unwrap();
+    let code = |name: &str| header.find_var(&["igemu", name]).map(|v| v.code);
+    let state_codes: Vec<_> = CYCLE_STAGES
+        .iter()
+        .map(|n| code(&format!("{n}_state")).unwrap())
+        .collect();
+    let fifo_codes: Vec<_> = CYCLE_STAGES
+        .iter()
+        .map(|n| code(&format!("{n}_fifo")))
+        .collect();
+    let ns = CYCLE_STAGES.len();
+    let mut state = vec![0u64; ns];
+    let mut occ = vec![0u64; ns];
+    let mut counts = vec![[0u64; 4]; ns];
+    let mut fifo_max = vec![0u64; ns];
+    let mut now = 0u64;
+    let mut last_time = 0u64;
+    while let Some(cmd) = p.next().transpose().unwrap() {
+        match cmd {
+            vcd::Command::Timestamp(t) => {
+                for i in 0..ns {
+                    counts[i][state[i] as usize] += t - now;
+                }
+                now = t;
+                last_time = t;
+            }
+            vcd::Command::ChangeVector(id, v) => {
+                let val = v
+                    .iter()
+                    .fold(0u64, |a, b| a * 2 + u64::from(b == vcd::Value::V1));
+                if let Some(i) = state_codes.iter().position(|&c| c == id) {
+                    state[i] = val;
+                } else if let Some(i) = fifo_codes.iter().position(|&c| c == Some(id)) {
+                    occ[i] = val;
+                    fifo_max[i] = fifo_max[i].max(val);
+                } else {
+                    panic!("unknown id {id}");
+                }
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(last_time, r.report.cycles.total_cycles);
+    for (i, st) in r.report.cycles.stages.iter().enumerate() {
+        assert_eq!(counts[i][State::Idle as usize], st.idle, "{} idle", st.name);
+        assert_eq!(counts[i][State::Busy as usize], st.busy, "{} busy", st.name);
+        assert_eq!(
+            counts[i][State::Stalled as usize],
+            st.stalled,
+            "{} stalled",
+            st.name
+        );
+        assert_eq!(
+            counts[i][State::Starved as usize],
+            st.starved,
+            "{} starved",
+            st.name
+        );
+        assert_eq!(fifo_max[i], st.fifo_max as u64, "{} fifo max", st.name);
+    }
+    assert!(
+        r.report.cycles.stages.iter().any(|s| s.stalled > 0),
+        "the trace should show back-pressure"
+    );
+}
+
+#[test]
+fn pinhole_camera_plans_no_dof_stage() {
+    let s = scene(
+        64,
+        48,
+        0.1,
+        &tri(
+            [[5.0, 5.0, 0.5], [40.0, 8.0, 0.5], [20.0, 40.0, 0.5]],
+            [1.0; 3],
+        ),
+    );
+    assert!(matches!(s.camera.lens, Lens::Pinhole));
+    let r = run(&s, &HwConfig::default_config());
+    assert!(!r.report.plan.stages.iter().any(|s| s == "dof"));
+    assert!(!r.report.cycles.plan.stages.iter().any(|s| s == "dof"));
+    assert!(r.report.cycles.plan.unmodelled.is_empty());
+}
+
+#[test]
+fn quarter_screen_scene_simulates_only_that_quarter() {
+    // Two triangles covering [0, 60]^2 of a 128x128 screen: the top-left quarter's tiles.
+    let objs = tri(
+        [[0.0, 0.0, 0.5], [60.0, 0.0, 0.5], [0.0, 60.0, 0.5]],
+        [0.7; 3],
+    ) + &tri(
+        [[60.0, 0.0, 0.5], [60.0, 60.0, 0.5], [0.0, 60.0, 0.5]],
+        [0.7; 3],
+    );
+    let s = scene(128, 128, 0.1, &objs);
+    let r = run(&s, &HwConfig::default_config());
+    let c = &r.report.cycles;
+    assert_eq!(c.plan.tiles_total, 64);
+    assert_eq!(c.plan.tiles_touched, 16);
+    assert!(
+        r.workload
+            .tiles
+            .iter()
+            .all(|t| t.tile % 8 < 4 && t.tile / 8 < 4)
+    );
+    assert!(c.plan.pixels_simulated <= 64 * 64);
+    assert_eq!(c.plan.pixels_simulated, work(&r, "accumulate", "pixels"));
+    assert_eq!(c.stages[5].items, c.plan.pixels_simulated);
+    // Every pixel outside the quarter is background.
+    let bg = r.dac[127 * 128 + 127];
+    for y in 0..128 {
+        for x in 0..128 {
+            if x >= 64 || y >= 64 {
+                assert_eq!(r.dac[y * 128 + x], bg);
+            }
+        }
+    }
+}
+
+#[test]
+fn cost_storage_is_exact_and_packs_with_bitvec() {
+    let s = Scene::default_scene();
+    let h = HwConfig::default_config();
+    let r = run(&s, &h);
+    let k = &r.report.cycles.cost;
+    let (w, ht) = (640u64, 480u64);
+    assert_eq!(k.storage_bits["accumulate"], w * ht * 12);
+    // 16 samples per pixel x (24-bit z + 16-bit intensity + primitive id bits).
+    let prims = r.workload.prims.len() as u64;
+    let id_bits = (prims + 1).next_power_of_two().trailing_zeros() as u64;
+    assert_eq!(
+        k.storage_bits["visibility"],
+        w * ht * 16 * (24 + 16 + id_bits)
+    );
+    assert_eq!(k.rom_bits["gamma"], 4096 * 8);
+    assert_eq!(k.packed.len(), 3);
+    for p in &k.packed {
+        assert!(p.verified, "{p:?}");
+        assert_eq!(
+            p.bits,
+            p.words * p.fields.iter().map(|&f| f as u64).sum::<u64>()
+        );
+    }
+    assert_eq!(k.packed[0].bits, k.storage_bits["accumulate"]);
+    assert_eq!(k.packed[1].bits, k.rom_bits["gamma"]);
+    // A word that does not fit its field is caught.
+    let bad = cycles::cost::pack("t", 2, &[4], 8, |r, _| [3, 17][r]);
+    assert!(!bad.verified);
+    let good = cycles::cost::pack("t", 2, &[5], 10, |r, _| [3, 17][r]);
+    assert!(good.verified);
+}
+
+#[test]
+fn bad_cycle_fields_name_the_field_and_range() {
+    for (text, field) in [
+        ("[cycles.raster]\nlanes = 0\n", "cycles.raster.lanes"),
+        ("[cycles]\ntile = 12\n", "cycles.tile"),
+        ("[cycles.gamma]\nfifo = 0\n", "cycles.gamma.fifo"),
+        ("[cycles]\nclock_mhz = -5.0\n", "cycles.clock_mhz"),
+    ] {
+        let e = HwConfig::from_toml(&TomlFile::from_text("hw.toml", text)).unwrap_err();
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.to_string().contains("must be"), "{e}");
+    }
+    let e = HwConfig::from_toml(&TomlFile::from_text("hw.toml", "[cycles.dof]\nlanes = 2\n"))
+        .unwrap_err();
+    assert!(e.to_string().contains("dof"), "{e}");
+    let ok = HwConfig::from_toml(&TomlFile::from_text(
+        "hw.toml",
+        "[cycles]\nclock_mhz = 50.0\n[cycles.raster]\nlanes = 8\nfifo = 3\n",
+    ))
+    .unwrap();
+    assert_eq!(ok.cycles.raster.lanes, 8);
+    assert_eq!(ok.cycles.raster.fifo, 3);
+    assert_eq!(ok.cycles.raster.latency, 4);
+    assert_eq!(ok.cycles.clock_mhz, 50.0);
+}
