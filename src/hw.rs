@@ -115,6 +115,8 @@ pub struct HwConfig {
     pub accumulate: AccumulateCfg,
     /// Gamma LUT.
     pub gamma: GammaCfg,
+    /// Dither (kind `none` plans no dither stage).
+    pub dither: crate::stage::dither::DitherCfg,
 }
 
 const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Quantizer {
@@ -159,6 +161,7 @@ impl HwConfig {
                 gamma: None,
                 correction: true,
             },
+            dither: crate::stage::dither::DitherCfg::default(),
         })
     }
 
@@ -242,6 +245,9 @@ impl HwConfig {
                 hw.gamma.gamma = g.gamma;
             }
             set(&mut hw.gamma.correction, g.correction);
+        }
+        if let Some(d) = raw.dither {
+            d.apply(&mut hw.dither);
         }
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
@@ -377,6 +383,7 @@ impl HwConfig {
                 format!("must be a finite number in (0, 5], got {g}"),
             );
         }
+        self.dither.validate(acc.int_bits, d)?;
         Ok(())
     }
 
@@ -401,6 +408,7 @@ struct RawHw {
     visibility: Option<RawVisibility>,
     accumulate: Option<RawAccumulate>,
     gamma: Option<RawGamma>,
+    dither: Option<crate::stage::dither::RawDither>,
 }
 
 #[derive(Deserialize)]

@@ -23,6 +23,7 @@ pub mod files;
 pub mod fixed;
 pub mod hw;
 pub mod output;
+pub mod perceptual;
 pub mod pipeline;
 pub mod scene;
 pub mod stage;

@@ -66,6 +66,9 @@ struct RenderArgs {
     /// Skip the stage-local comparisons (faster).
     #[arg(long)]
     no_local: bool,
+    /// Write the banding map: the output dimmed, smooth regions lifted, visible contour steps white (8-bit PNG).
+    #[arg(long)]
+    banding_out: Option<String>,
 }
 
 #[derive(Args)]
@@ -247,6 +250,11 @@ fn render(a: RenderArgs) -> Result<ExitCode, Error> {
     }
     if let Some(p) = &a.diff_out {
         output::write_diff(p, &r.dac, &r.dac_ref, w, h)?;
+    }
+    if let Some(p) = &a.banding_out {
+        let img =
+            igemu::perceptual::banding_image(&r.dac, &r.contour_map, (1u32 << r.dac_bits) - 1);
+        output::write_raw8(p, &img, w, h)?;
     }
     for (stage, path) in &dumps {
         let codes: Vec<u32> = match stage.as_str() {
@@ -430,6 +438,27 @@ fn print_report(r: &Report, out: &str) {
         w.over_delta,
         100.0 * w.over_delta_fraction
     );
+    let k = &r.contours;
+    println!(
+        "  visible contours (smooth regions, window {}x{} px per side, delta {}): {} steps ({} px) | float reference: {} steps | smooth steps {}",
+        k.window[0],
+        k.window[1],
+        k.delta,
+        k.contour_steps,
+        k.contour_pixels,
+        k.contour_steps_reference,
+        k.smooth_steps
+    );
+    if let Some(pm) = r
+        .stages
+        .iter()
+        .find_map(|s| s.notes.get("temporal_period_mean"))
+    {
+        println!(
+            "  temporal dither: static frame over a period of {} frames: {} of {} pixels average exactly to their input (max |error| {} LSB)",
+            pm["period"], pm["exact_pixels"], pm["pixels"], pm["max_abs_error"]
+        );
+    }
     println!(
         "cost: storage {} bits ({:.1} KiB), LUT/ROM {} bits | overflows {}",
         r.storage_bits,
