@@ -21,6 +21,7 @@ pub mod compare;
 pub mod error;
 pub mod files;
 pub mod fixed;
+pub mod flicker;
 pub mod hw;
 pub mod output;
 pub mod perceptual;
