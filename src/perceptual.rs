@@ -171,14 +171,15 @@ pub fn contours(
         let step = if horizontal { 1 } else { w };
         let get = |p: Option<usize>, k: usize| p.and_then(|p| ex.get(p)).and_then(|v| v[k]);
         for p in 0..w * h {
-            let Some(e0) = ex[p][0] else { continue };
+            if ex[p][0].is_none() {
+                continue;
+            }
             rep.smooth_steps += 1;
             map[p] = map[p].max(1);
             let prev = p.checked_sub(step);
             let next = Some(p + step);
-            for k in 0..2 {
-                let e = ex[p][k].unwrap_or(0.0);
-                let _ = e0;
+            for (k, e) in ex[p].iter().enumerate() {
+                let e = e.unwrap_or(0.0);
                 if e > thr
                     && get(prev, k).is_none_or(|v| e >= v)
                     && get(next, k).is_none_or(|v| e > v)
