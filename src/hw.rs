@@ -117,6 +117,8 @@ pub struct HwConfig {
     pub gamma: GammaCfg,
     /// Timing of the stages for the cycle model (`[cycles]`).
     pub cycles: crate::cycles::CyclesCfg,
+    /// Dither (kind `none` plans no dither stage).
+    pub dither: crate::stage::dither::DitherCfg,
 }
 
 const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Quantizer {
@@ -162,6 +164,7 @@ impl HwConfig {
                 correction: true,
             },
             cycles: crate::cycles::CyclesCfg::default_for(acc_bits),
+            dither: crate::stage::dither::DitherCfg::default(),
         })
     }
 
@@ -248,6 +251,9 @@ impl HwConfig {
         }
         if let Some(c) = raw.cycles {
             c.apply(&mut hw.cycles);
+        }
+        if let Some(d) = raw.dither {
+            d.apply(&mut hw.dither);
         }
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
@@ -384,6 +390,7 @@ impl HwConfig {
             );
         }
         self.cycles.validate()?;
+        self.dither.validate(acc.int_bits, d)?;
         Ok(())
     }
 
@@ -409,6 +416,7 @@ struct RawHw {
     accumulate: Option<RawAccumulate>,
     gamma: Option<RawGamma>,
     cycles: Option<crate::cycles::RawCycles>,
+    dither: Option<crate::stage::dither::RawDither>,
 }
 
 #[derive(Deserialize)]

@@ -32,6 +32,8 @@ enum Cmd {
     Dof(DofArgs),
     /// Cycle-count a frame on the scene's real workload: bottleneck, frame rate, real-time check, cost.
     Cycles(CyclesArgs),
+    /// Small-object flicker: a light point and a thin line swept over 32x32 sub-pixel phases.
+    Flicker(FlickerArgs),
 }
 
 #[derive(Args)]
@@ -47,6 +49,32 @@ struct CyclesArgs {
     /// Print the cycle report as JSON.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(Args)]
+struct FlickerArgs {
+    /// Hardware config: a preset (linear12, linear11, linear8) or a TOML file.
+    #[arg(long)]
+    hw: Option<String>,
+    /// Override the filter.
+    #[arg(long, value_enum)]
+    filter: Option<FilterArg>,
+    /// Model a system without gamma correction (a linear LUT).
+    #[arg(long)]
+    no_gamma_correction: bool,
+    /// Sub-pixel phases per axis (2..=64).
+    #[arg(long, default_value_t = 32)]
+    phases: u32,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum FilterArg {
+    Box,
+    Tent,
+    Gaussian,
 }
 
 #[derive(Args)]
@@ -83,6 +111,9 @@ struct RenderArgs {
     /// Skip the stage-local comparisons (faster).
     #[arg(long)]
     no_local: bool,
+    /// Write the banding map: the output dimmed, smooth regions lifted, visible contour steps white (8-bit PNG).
+    #[arg(long)]
+    banding_out: Option<String>,
 }
 
 #[derive(Args)]
@@ -212,6 +243,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
             }
             Ok(ExitCode::SUCCESS)
         }
+        Cmd::Flicker(a) => flicker(a),
         Cmd::Dof(a) => {
             let d = calc::depth_of_field(a.f_number, a.coc, a.focal, a.distance)
                 .map_err(|m| arg_error("dof", m))?;
@@ -265,6 +297,11 @@ fn render(a: RenderArgs) -> Result<ExitCode, Error> {
     }
     if let Some(p) = &a.diff_out {
         output::write_diff(p, &r.dac, &r.dac_ref, w, h)?;
+    }
+    if let Some(p) = &a.banding_out {
+        let img =
+            igemu::perceptual::banding_image(&r.dac, &r.contour_map, (1u32 << r.dac_bits) - 1);
+        output::write_raw8(p, &img, w, h)?;
     }
     for (stage, path) in &dumps {
         let codes: Vec<u32> = match stage.as_str() {
@@ -616,6 +653,27 @@ fn print_report(r: &Report, out: &str) {
         w.over_delta,
         100.0 * w.over_delta_fraction
     );
+    let k = &r.contours;
+    println!(
+        "  visible contours (smooth regions, window {}x{} px per side, delta {}): {} steps ({} px) | float reference: {} steps | smooth steps {}",
+        k.window[0],
+        k.window[1],
+        k.delta,
+        k.contour_steps,
+        k.contour_pixels,
+        k.contour_steps_reference,
+        k.smooth_steps
+    );
+    if let Some(pm) = r
+        .stages
+        .iter()
+        .find_map(|s| s.notes.get("temporal_period_mean"))
+    {
+        println!(
+            "  temporal dither: static frame over a period of {} frames: {} of {} pixels average exactly to their input (max |error| {} LSB)",
+            pm["period"], pm["exact_pixels"], pm["pixels"], pm["max_abs_error"]
+        );
+    }
     println!(
         "cost: storage {} bits ({:.1} KiB), LUT/ROM {} bits | overflows {}",
         r.storage_bits,
@@ -626,4 +684,74 @@ fn print_report(r: &Report, out: &str) {
     println!();
     print_cycles(&r.cycles);
     println!("wrote {out}");
+}
+
+fn flicker(a: FlickerArgs) -> Result<ExitCode, Error> {
+    use igemu::hw::FilterKind;
+    if !(2..=64).contains(&a.phases) {
+        return Err(arg_error(
+            "--phases",
+            format!("must be in 2..=64, got {}", a.phases),
+        ));
+    }
+    let mut hw = HwConfig::resolve(a.hw.as_deref())?;
+    if let Some(f) = a.filter {
+        hw.accumulate.filter = match f {
+            FilterArg::Box => FilterKind::Box,
+            FilterArg::Tent => FilterKind::Tent,
+            FilterArg::Gaussian => FilterKind::Gaussian,
+        };
+    }
+    if a.no_gamma_correction {
+        hw.gamma.correction = false;
+    }
+    let r = igemu::flicker::flicker(&hw, a.phases)?;
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&r).expect("serialisable")
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "flicker | hardware `{}` | filter {:?} | gamma {} {} | {}x{} phases on a {}x{} px scene",
+        r.hardware,
+        r.filter,
+        r.gamma,
+        if r.gamma_correction {
+            "corrected"
+        } else {
+            "NOT corrected"
+        },
+        r.phases,
+        r.phases,
+        r.scene_size,
+        r.scene_size
+    );
+    for o in &r.objects {
+        println!("{} ({}):", o.object, o.description);
+        println!(
+            "  accumulator sum ripple        {} LSB ({:.4}% of the mean)",
+            o.acc_ripple_lsb, o.acc_ripple_pct
+        );
+        println!(
+            "  displayed luminance ripple    {:.3}% peak to peak of the mean ({:.3} cd/m2 summed)",
+            o.displayed_ripple_pct, o.mean_luminance
+        );
+        println!(
+            "  peak-pixel modulation         {:.2}%",
+            o.peak_pixel_modulation_pct
+        );
+        println!(
+            "  split 50/50 over two pixels   {:+.2}% brightness vs the pixel-aligned phase",
+            o.half_pixel_brightness_error_pct
+        );
+    }
+    if !r.gamma_correction {
+        println!(
+            "analytic split error without correction: 2 (1/2)^{} - 1 = {:+.2}%",
+            r.gamma, r.analytic_split_error_pct
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -76,3 +76,11 @@ pub fn write_diff(
         path,
     )
 }
+
+/// Writes 8-bit grey values as they are.
+pub fn write_raw8(path: &str, data: &[u8], width: u32, height: u32) -> Result<()> {
+    save(
+        ImageBuffer::<Luma<u8>, _>::from_raw(width, height, data.to_vec()).expect("size matches"),
+        path,
+    )
+}

@@ -97,6 +97,8 @@ pub struct Report {
     pub timing: Timing,
     /// Cycle model, throughput and cost summary.
     pub cycles: crate::cycles::CycleReport,
+    /// Visible contours through the display model (see [`crate::perceptual`]).
+    pub contours: crate::perceptual::ContourReport,
 }
 
 /// Everything a render produces.
@@ -115,6 +117,8 @@ pub struct Render {
     pub dac_bits: u32,
     /// The cycle model's token streams (to re-simulate with other timings or a VCD trace).
     pub workload: crate::cycles::Workload,
+    /// Per pixel: 0 not smooth, 1 smooth, 2 next to a visible contour step.
+    pub contour_map: Vec<u8>,
 }
 
 /// Options of a render.
@@ -712,6 +716,23 @@ pub fn post(a: &Accumulated, scene: &Scene, hw: &HwConfig, opts: RenderOptions) 
         hw.gamma.dac_bits,
         hw.gamma.quant,
     );
+    if hw.dither.kind != crate::stage::dither::DitherKind::None {
+        let d = crate::stage::dither::post(
+            &a.frame.acc,
+            &a.frame_ref,
+            (scene.image.width, scene.image.height),
+            frame_fmt.int_bits,
+            frame_fmt.frac_bits,
+            &spec,
+            &hw.dither,
+            opts.stage_local,
+        );
+        return Ok(Post {
+            dac: d.dac,
+            dac_ref: d.dac_ref,
+            reports: d.reports,
+        });
+    }
     let mut r = stage("gamma");
     let t = Instant::now();
     let lut = GammaLut::build(&spec, frame_fmt.int_bits);
@@ -764,6 +785,22 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Rende
     let codes = compare::codes(&p.dac, &p.dac_ref, hw.gamma.dac_bits);
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let weber = compare::weber(&p.dac, &p.dac_ref, &display);
+    let contours = {
+        let ff = hw.accumulate.frame.format;
+        let white_lsb = (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64;
+        let spec = GammaSpec::new(
+            hw.gamma.gamma.unwrap_or(scene.display.gamma),
+            hw.gamma.correction,
+            hw.gamma.dac_bits,
+            hw.gamma.quant,
+        );
+        let ideal: Vec<f64> = a
+            .frame_ref
+            .iter()
+            .map(|&v| spec.ideal(v / white_lsb))
+            .collect();
+        crate::perceptual::contours(&p.dac, &p.dac_ref, &ideal, &display, width, height)
+    };
     let [r_setup, r_raster, r_vis] = g.reports;
     let mut stages = vec![f.input, r_setup, r_raster, r_vis, a.report];
     stages.extend(p.reports);
@@ -821,6 +858,7 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Rende
         lut_bits,
         timing,
         cycles,
+        contours: contours.report,
     };
     Ok(Render {
         report,
@@ -830,6 +868,7 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Rende
         frame_ref: a.frame_ref,
         dac_bits: hw.gamma.dac_bits,
         workload,
+        contour_map: contours.map,
     })
 }
 

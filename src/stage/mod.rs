@@ -2,6 +2,7 @@
 //! model, its float reference, its work counts and its cost side by side.
 
 pub mod accumulate;
+pub mod dither;
 pub mod gamma;
 pub mod input;
 pub mod raster;

@@ -1,0 +1,213 @@
+//! Perceptual metrics of a rendered image: visible contours (banding) through the display
+//! model.
+//!
+//! **Definition.** For every pair of adjacent pixels `(p, p+e)` (`e` = one pixel right or
+//! down) two side windows are compared: side A is the `L = 4` pixels ending at `p` along `e`,
+//! side B the `L` pixels starting at `p+e`, both `2W+1 = 5` pixels wide across `e`. The eye is
+//! modelled as averaging displayed luminance over each side (so a dither pattern finer than
+//! the window is averaged away, as it is when viewed).
+//! * The step is in a **smooth region** when the ideal (unquantised) DAC value of the float
+//!   reference spans at most [`SMOOTH_CODES`] = 2 DAC codes over the whole `2L x (2W+1)`
+//!   window: no edge of the scene is there, only shading.
+//! * Its **excess step** is `|ln(A_out / B_out) - ln(A_ideal / B_ideal)|`: the luminance
+//!   ratio across the step in the output, beyond the ratio the ideal image has there (the
+//!   scene's own gradient is not a contour).
+//! * A **visible contour step** is a smooth step whose excess exceeds `ln(1 + delta)` (the
+//!   scene's Weber fraction) and is a local maximum along `e` (each contour line is counted
+//!   once per pixel of its length, not once per window position).
+//!
+//! `contour_steps` counts such steps over both directions; `contour_pixels` the pixels on
+//! either side of one.
+
+use crate::compare::DisplayModel;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Half-length of a side window along the step, pixels.
+pub const SIDE: usize = 4;
+/// Half-width of a side window across the step, pixels (`2W+1` wide).
+pub const HALF_WIDTH: usize = 2;
+/// Largest span of the ideal DAC value over a window that is still "smooth", in DAC codes.
+pub const SMOOTH_CODES: f64 = 2.0;
+
+/// Contour report (part of every render report).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ContourReport {
+    /// Weber fraction a step must exceed to be visible.
+    pub delta: f64,
+    /// Side window: length along the step and width across it, pixels.
+    pub window: [usize; 2],
+    /// Smooth-region threshold: span of the ideal DAC value over a window, codes.
+    pub smooth_max_codes: f64,
+    /// Adjacent-pixel steps in smooth regions.
+    pub smooth_steps: u64,
+    /// Visible contour steps of the fixed output.
+    pub contour_steps: u64,
+    /// Pixels next to a visible contour step (fixed output).
+    pub contour_pixels: u64,
+    /// Visible contour steps of the float reference's DAC codes (same metric).
+    pub contour_steps_reference: u64,
+}
+
+/// The per-pixel result: contour mask of the fixed output.
+pub struct Contours {
+    /// The report.
+    pub report: ContourReport,
+    /// Per pixel: 0 not smooth, 1 smooth, 2 next to a visible contour step.
+    pub map: Vec<u8>,
+}
+
+fn integral(v: &[f64], w: usize, h: usize) -> Vec<f64> {
+    let mut s = vec![0.0; (w + 1) * (h + 1)];
+    for y in 0..h {
+        let mut row = 0.0;
+        for x in 0..w {
+            row += v[y * w + x];
+            s[(y + 1) * (w + 1) + x + 1] = s[y * (w + 1) + x + 1] + row;
+        }
+    }
+    s
+}
+
+/// Sum over `[x0, x1) x [y0, y1)` of an integral image of width `w`.
+#[inline]
+fn rect(s: &[f64], w: usize, x0: usize, y0: usize, x1: usize, y1: usize) -> f64 {
+    let w1 = w + 1;
+    s[y1 * w1 + x1] - s[y0 * w1 + x1] - s[y1 * w1 + x0] + s[y0 * w1 + x0]
+}
+
+/// Excess steps along one direction: `(smooth, excess)` per pair, indexed by the first
+/// pixel; `horizontal` pairs `(x, y)-(x+1, y)`.
+fn excess(
+    out: &[&[f64]],
+    ideal_lum: &[f64],
+    ideal_code: &[f64],
+    w: usize,
+    h: usize,
+    horizontal: bool,
+) -> Vec<Vec<Option<f64>>> {
+    let si = integral(ideal_lum, w, h);
+    let so: Vec<Vec<f64>> = out.iter().map(|o| integral(o, w, h)).collect();
+    let (l, hw) = (SIDE, HALF_WIDTH);
+    (0..h * w)
+        .into_par_iter()
+        .map(|p| {
+            let (x, y) = (p % w, p / w);
+            // Along-axis coordinate a, across-axis b.
+            let (a, b, na, nb) = if horizontal {
+                (x, y, w, h)
+            } else {
+                (y, x, h, w)
+            };
+            if a + 1 < l || a + l >= na || b < hw || b + hw >= nb {
+                return vec![None; out.len()];
+            }
+            let (a0, a1, a2) = (a + 1 - l, a + 1, a + 1 + l);
+            let (b0, b1) = (b - hw, b + hw + 1);
+            let r = |a0: usize, a1: usize| {
+                if horizontal {
+                    (a0, b0, a1, b1)
+                } else {
+                    (b0, a0, b1, a1)
+                }
+            };
+            let (ra, rb) = (r(a0, a1), r(a1, a2));
+            // Smoothness of the ideal signal over the whole window.
+            let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+            for aa in a0..a2 {
+                for bb in b0..b1 {
+                    let q = if horizontal { bb * w + aa } else { aa * w + bb };
+                    lo = lo.min(ideal_code[q]);
+                    hi = hi.max(ideal_code[q]);
+                }
+            }
+            if hi - lo > SMOOTH_CODES {
+                return vec![None; out.len()];
+            }
+            let ideal =
+                (rect(&si, w, ra.0, ra.1, ra.2, ra.3) / rect(&si, w, rb.0, rb.1, rb.2, rb.3)).ln();
+            so.iter()
+                .map(|s| {
+                    let o = (rect(s, w, ra.0, ra.1, ra.2, ra.3)
+                        / rect(s, w, rb.0, rb.1, rb.2, rb.3))
+                    .ln();
+                    Some((o - ideal).abs())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Measures visible contours of `dac` (and of `dac_ref`) against the ideal DAC values
+/// `ideal` (real, DAC units) on a `width x height` image.
+pub fn contours(
+    dac: &[u16],
+    dac_ref: &[u16],
+    ideal: &[f64],
+    display: &DisplayModel,
+    width: u32,
+    height: u32,
+) -> Contours {
+    let (w, h) = (width as usize, height as usize);
+    let lum_of = |c: &[u16]| -> Vec<f64> { c.iter().map(|&c| display.luminance(c)).collect() };
+    let (lf, lr) = (lum_of(dac), lum_of(dac_ref));
+    let li: Vec<f64> = ideal
+        .iter()
+        .map(|&v| {
+            let n = (v / display.max_code).clamp(0.0, 1.0);
+            display.b_min + (display.b_max - display.b_min) * n.powf(display.gamma)
+        })
+        .collect();
+    let thr = (1.0 + display.weber).ln();
+    let mut rep = ContourReport {
+        delta: display.weber,
+        window: [SIDE, 2 * HALF_WIDTH + 1],
+        smooth_max_codes: SMOOTH_CODES,
+        ..Default::default()
+    };
+    let mut map = vec![0u8; w * h];
+    for horizontal in [true, false] {
+        let ex = excess(&[&lf, &lr], &li, ideal, w, h, horizontal);
+        let step = if horizontal { 1 } else { w };
+        let get = |p: Option<usize>, k: usize| p.and_then(|p| ex.get(p)).and_then(|v| v[k]);
+        for p in 0..w * h {
+            if ex[p][0].is_none() {
+                continue;
+            }
+            rep.smooth_steps += 1;
+            map[p] = map[p].max(1);
+            let prev = p.checked_sub(step);
+            let next = Some(p + step);
+            for (k, e) in ex[p].iter().enumerate() {
+                let e = e.unwrap_or(0.0);
+                if e > thr
+                    && get(prev, k).is_none_or(|v| e >= v)
+                    && get(next, k).is_none_or(|v| e > v)
+                {
+                    if k == 0 {
+                        rep.contour_steps += 1;
+                        map[p] = 2;
+                        map[p + step] = 2;
+                    } else {
+                        rep.contour_steps_reference += 1;
+                    }
+                }
+            }
+        }
+    }
+    rep.contour_pixels = map.iter().filter(|&&m| m == 2).count() as u64;
+    Contours { report: rep, map }
+}
+
+/// The banding-map image (8-bit grey): the output dimmed to 0..=100, smooth regions lifted by
+/// 20 grey levels, pixels next to a visible contour step white.
+pub fn banding_image(dac: &[u16], map: &[u8], max_code: u32) -> Vec<u8> {
+    dac.iter()
+        .zip(map)
+        .map(|(&c, &m)| match m {
+            2 => 255,
+            1 => 20 + (c as u32 * 100 / max_code.max(1)) as u8,
+            _ => (c as u32 * 100 / max_code.max(1)) as u8,
+        })
+        .collect()
+}
