@@ -115,6 +115,8 @@ pub struct HwConfig {
     pub accumulate: AccumulateCfg,
     /// Gamma LUT.
     pub gamma: GammaCfg,
+    /// Depth of field (used only with a thin-lens camera).
+    pub dof: crate::stage::dof::DofParams,
 }
 
 const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Quantizer {
@@ -158,6 +160,19 @@ impl HwConfig {
                 quant: Quant::RndConv,
                 gamma: None,
                 correction: true,
+            },
+            dof: crate::stage::dof::DofParams {
+                p: 0.1,
+                k: 0.05,
+                coef_bits: 12,
+                alpha_bits: 12,
+                guard_bits: 4,
+                // x * coverage (acc + 5 bits for 4x4 samples) times the 2^12 tap sum.
+                line_bits: acc_bits + 5 + 12,
+                acc_bits: acc_bits + 5 + 24,
+                max_half_size: 32,
+                quant: Quant::RndConv,
+                overflow: Overflow::Sat,
             },
         })
     }
@@ -242,6 +257,18 @@ impl HwConfig {
                 hw.gamma.gamma = g.gamma;
             }
             set(&mut hw.gamma.correction, g.correction);
+        }
+        if let Some(d) = raw.dof {
+            set(&mut hw.dof.p, d.p);
+            set(&mut hw.dof.k, d.k);
+            set(&mut hw.dof.coef_bits, d.coef_bits);
+            set(&mut hw.dof.alpha_bits, d.alpha_bits);
+            set(&mut hw.dof.guard_bits, d.guard_bits);
+            set(&mut hw.dof.line_bits, d.line_bits);
+            set(&mut hw.dof.acc_bits, d.acc_bits);
+            set(&mut hw.dof.max_half_size, d.max_half_size);
+            set(&mut hw.dof.quant, d.quant);
+            set(&mut hw.dof.overflow, d.overflow);
         }
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
@@ -377,6 +404,7 @@ impl HwConfig {
                 format!("must be a finite number in (0, 5], got {g}"),
             );
         }
+        crate::stage::dof::validate(&self.dof)?;
         Ok(())
     }
 
@@ -401,6 +429,7 @@ struct RawHw {
     visibility: Option<RawVisibility>,
     accumulate: Option<RawAccumulate>,
     gamma: Option<RawGamma>,
+    dof: Option<RawDof>,
 }
 
 #[derive(Deserialize)]
@@ -447,4 +476,19 @@ struct RawGamma {
     quant: Option<Quant>,
     gamma: Option<f64>,
     correction: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDof {
+    p: Option<f64>,
+    k: Option<f64>,
+    coef_bits: Option<u32>,
+    alpha_bits: Option<u32>,
+    guard_bits: Option<u32>,
+    line_bits: Option<u32>,
+    acc_bits: Option<u32>,
+    max_half_size: Option<u32>,
+    quant: Option<Quant>,
+    overflow: Option<Overflow>,
 }

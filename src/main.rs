@@ -66,6 +66,9 @@ struct RenderArgs {
     /// Skip the stage-local comparisons (faster).
     #[arg(long)]
     no_local: bool,
+    /// Also run the per-pixel depth-of-field reference (slow: O(N^2 M^2)) and the layer theorem check.
+    #[arg(long)]
+    dof_reference: bool,
 }
 
 #[derive(Args)]
@@ -234,11 +237,13 @@ fn render(a: RenderArgs) -> Result<ExitCode, Error> {
         }
         dumps.push((stage.to_string(), path.to_string()));
     }
-    let r = run(
-        &a.s,
+    let r = pipeline::render_ext(
+        &load_scene(a.s.scene.as_deref())?,
+        &HwConfig::resolve(a.s.hw.as_deref())?,
         RenderOptions {
             stage_local: !a.no_local,
         },
+        a.dof_reference,
     )?;
     let (w, h) = (r.report.scene.width, r.report.scene.height);
     output::write_dac(&a.out, &r.dac, w, h, r.dac_bits)?;

@@ -2,6 +2,7 @@
 //! model, its float reference, its work counts and its cost side by side.
 
 pub mod accumulate;
+pub mod dof;
 pub mod gamma;
 pub mod input;
 pub mod raster;
@@ -19,6 +20,7 @@ pub const STAGES: &[&str] = &[
     "raster",
     "visibility",
     "accumulate",
+    "dof",
     "gamma",
 ];
 
