@@ -167,9 +167,9 @@ impl HwConfig {
                 coef_bits: 12,
                 alpha_bits: 12,
                 guard_bits: 4,
-                // x * coverage (acc + 5 bits for 4x4 samples) times the 2^12 tap sum.
-                line_bits: acc_bits + 5 + 12,
-                acc_bits: acc_bits + 5 + 24,
+                // x * coverage ((2^acc - 1) * 16 < 2^(acc + 4) for 4x4 samples) times the 2^12 tap sum.
+                line_bits: acc_bits + 4 + 12,
+                acc_bits: acc_bits + 4 + 24,
                 max_half_size: 32,
                 quant: Quant::RndConv,
                 overflow: Overflow::Sat,
