@@ -119,6 +119,8 @@ pub struct HwConfig {
     pub cycles: crate::cycles::CyclesCfg,
     /// Dither (kind `none` plans no dither stage).
     pub dither: crate::stage::dither::DitherCfg,
+    /// Depth of field (used only with a thin-lens camera).
+    pub dof: crate::stage::dof::DofParams,
 }
 
 const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Quantizer {
@@ -165,6 +167,19 @@ impl HwConfig {
             },
             cycles: crate::cycles::CyclesCfg::default_for(acc_bits),
             dither: crate::stage::dither::DitherCfg::default(),
+            dof: crate::stage::dof::DofParams {
+                p: 0.1,
+                k: 0.05,
+                coef_bits: 12,
+                alpha_bits: 12,
+                guard_bits: 4,
+                // x * coverage ((2^acc - 1) * 16 < 2^(acc + 4) for 4x4 samples) times the 2^12 tap sum.
+                line_bits: acc_bits + 4 + 12,
+                acc_bits: acc_bits + 4 + 24,
+                max_half_size: 32,
+                quant: Quant::RndConv,
+                overflow: Overflow::Sat,
+            },
         })
     }
 
@@ -254,6 +269,18 @@ impl HwConfig {
         }
         if let Some(d) = raw.dither {
             d.apply(&mut hw.dither);
+        }
+        if let Some(d) = raw.dof {
+            set(&mut hw.dof.p, d.p);
+            set(&mut hw.dof.k, d.k);
+            set(&mut hw.dof.coef_bits, d.coef_bits);
+            set(&mut hw.dof.alpha_bits, d.alpha_bits);
+            set(&mut hw.dof.guard_bits, d.guard_bits);
+            set(&mut hw.dof.line_bits, d.line_bits);
+            set(&mut hw.dof.acc_bits, d.acc_bits);
+            set(&mut hw.dof.max_half_size, d.max_half_size);
+            set(&mut hw.dof.quant, d.quant);
+            set(&mut hw.dof.overflow, d.overflow);
         }
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
@@ -391,6 +418,7 @@ impl HwConfig {
         }
         self.cycles.validate()?;
         self.dither.validate(acc.int_bits, d)?;
+        crate::stage::dof::validate(&self.dof)?;
         Ok(())
     }
 
@@ -417,6 +445,7 @@ struct RawHw {
     gamma: Option<RawGamma>,
     cycles: Option<crate::cycles::RawCycles>,
     dither: Option<crate::stage::dither::RawDither>,
+    dof: Option<RawDof>,
 }
 
 #[derive(Deserialize)]
@@ -463,4 +492,19 @@ struct RawGamma {
     quant: Option<Quant>,
     gamma: Option<f64>,
     correction: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDof {
+    p: Option<f64>,
+    k: Option<f64>,
+    coef_bits: Option<u32>,
+    alpha_bits: Option<u32>,
+    guard_bits: Option<u32>,
+    line_bits: Option<u32>,
+    acc_bits: Option<u32>,
+    max_half_size: Option<u32>,
+    quant: Option<Quant>,
+    overflow: Option<Overflow>,
 }

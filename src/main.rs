@@ -114,6 +114,9 @@ struct RenderArgs {
     /// Write the banding map: the output dimmed, smooth regions lifted, visible contour steps white (8-bit PNG).
     #[arg(long)]
     banding_out: Option<String>,
+    /// Also run the per-pixel depth-of-field reference (slow: O(N^2 M^2)) and the layer theorem check.
+    #[arg(long)]
+    dof_reference: bool,
 }
 
 #[derive(Args)]
@@ -284,11 +287,13 @@ fn render(a: RenderArgs) -> Result<ExitCode, Error> {
         }
         dumps.push((stage.to_string(), path.to_string()));
     }
-    let r = run(
-        &a.s,
+    let r = pipeline::render_ext(
+        &load_scene(a.s.scene.as_deref())?,
+        &HwConfig::resolve(a.s.hw.as_deref())?,
         RenderOptions {
             stage_local: !a.no_local,
         },
+        a.dof_reference,
     )?;
     let (w, h) = (r.report.scene.width, r.report.scene.height);
     output::write_dac(&a.out, &r.dac, w, h, r.dac_bits)?;

@@ -777,9 +777,27 @@ pub fn post(a: &Accumulated, scene: &Scene, hw: &HwConfig, opts: RenderOptions) 
 
 /// Runs the whole pipeline, fixed and float, and compares them.
 pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Render> {
+    render_ext(scene, hw, opts, false)
+}
+
+/// [`render`], with `dof_reference` also running the (slow) per-pixel DoF reference.
+pub fn render_ext(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RenderOptions,
+    dof_reference: bool,
+) -> Result<Render> {
     let f = front(scene, hw)?;
     let g = geometry(&f, hw, opts)?;
-    let a = accumulate_phase(&f, &g, hw, opts)?;
+    let mut a = accumulate_phase(&f, &g, hw, opts)?;
+    let r_dof = crate::stage::dof::run_stage(
+        scene,
+        hw,
+        &mut a.frame,
+        &mut a.frame_ref,
+        opts.stage_local,
+        dof_reference,
+    )?;
     let p = post(&a, scene, hw, opts)?;
     let (width, height) = (scene.image.width, scene.image.height);
     let codes = compare::codes(&p.dac, &p.dac_ref, hw.gamma.dac_bits);
@@ -803,6 +821,7 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Rende
     };
     let [r_setup, r_raster, r_vis] = g.reports;
     let mut stages = vec![f.input, r_setup, r_raster, r_vis, a.report];
+    stages.extend(r_dof);
     stages.extend(p.reports);
     let overflows = stages
         .iter()

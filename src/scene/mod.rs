@@ -43,7 +43,10 @@ pub const MIN_TESSELLATION: u32 = 3;
 pub const MAX_TESSELLATION: u32 = 1024;
 
 /// Embedded scenes by name: `(name, TOML text)`. [`Scene::embedded`] looks names up here.
-pub const EMBEDDED: &[(&str, &str)] = &[("default", include_str!("default.toml"))];
+pub const EMBEDDED: &[(&str, &str)] = &[
+    ("default", include_str!("default.toml")),
+    ("cone-focus", include_str!("cone-focus.toml")),
+];
 
 /// A whole scene: what to draw, how to look at it and on which display.
 #[derive(Clone, Debug, PartialEq, Serialize)]

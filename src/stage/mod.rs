@@ -3,6 +3,7 @@
 
 pub mod accumulate;
 pub mod dither;
+pub mod dof;
 pub mod gamma;
 pub mod input;
 pub mod raster;
@@ -20,6 +21,7 @@ pub const STAGES: &[&str] = &[
     "raster",
     "visibility",
     "accumulate",
+    "dof",
     "gamma",
 ];
 
