@@ -14,7 +14,14 @@ pub const MAX_LUT_ADDRESS_BITS: u32 = 20;
 /// Largest guard band beyond the screen edge, in pixels.
 pub const MAX_GUARD_BAND: u32 = 4096;
 /// Preset names, the first is the default.
-pub const PRESETS: &[&str] = &["linear12", "linear11", "linear8"];
+pub const PRESETS: &[&str] = &[
+    "linear12",
+    "linear11",
+    "linear8",
+    "log8-potentiate",
+    "log8-logadd",
+    "log7-logadd",
+];
 
 /// Filter used to turn sub-pixel samples into pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -115,6 +122,8 @@ pub struct HwConfig {
     pub accumulate: AccumulateCfg,
     /// Gamma LUT.
     pub gamma: GammaCfg,
+    /// Intensity coding of the stored samples and the frame memory (linear or log).
+    pub coding: crate::stage::logdomain::CodingCfg,
 }
 
 const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Quantizer {
@@ -124,11 +133,11 @@ const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Qu
 impl HwConfig {
     /// A preset by name.
     pub fn preset(name: &str) -> Option<HwConfig> {
-        let acc_bits = match name {
-            "linear12" => 12,
-            "linear11" => 11,
-            "linear8" => 8,
-            _ => return None,
+        let (acc_bits, coding) = match name {
+            "linear12" => (12, crate::stage::logdomain::CodingCfg::linear()),
+            "linear11" => (11, crate::stage::logdomain::CodingCfg::linear()),
+            "linear8" => (8, crate::stage::logdomain::CodingCfg::linear()),
+            _ => (12, crate::stage::logdomain::CodingCfg::preset(name)?),
         };
         Some(HwConfig {
             name: name.to_string(),
@@ -159,6 +168,7 @@ impl HwConfig {
                 gamma: None,
                 correction: true,
             },
+            coding,
         })
     }
 
@@ -242,6 +252,9 @@ impl HwConfig {
                 hw.gamma.gamma = g.gamma;
             }
             set(&mut hw.gamma.correction, g.correction);
+        }
+        if let Some(c) = raw.coding {
+            c.apply(&mut hw.coding);
         }
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
@@ -377,6 +390,7 @@ impl HwConfig {
                 format!("must be a finite number in (0, 5], got {g}"),
             );
         }
+        self.coding.validate()?;
         Ok(())
     }
 
@@ -401,6 +415,7 @@ struct RawHw {
     visibility: Option<RawVisibility>,
     accumulate: Option<RawAccumulate>,
     gamma: Option<RawGamma>,
+    coding: Option<crate::stage::logdomain::RawCoding>,
 }
 
 #[derive(Deserialize)]

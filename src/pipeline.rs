@@ -13,6 +13,7 @@ use crate::scene::{GuardBand, HostScene, Primitive, Scene, front_end};
 use crate::stage::accumulate::{self, AccParams, AccRef, Frame, Kernel, PointFrags};
 use crate::stage::gamma::{self, GammaLut, GammaSpec};
 use crate::stage::input::{self, QPrim};
+use crate::stage::logdomain::{self, CodingKind};
 use crate::stage::raster::{
     self, FPrim, FVertex, Frag, FragF, RasterParams, RasterWork, SampleRegion,
 };
@@ -709,16 +710,35 @@ pub fn post(a: &Accumulated, scene: &Scene, hw: &HwConfig, opts: RenderOptions) 
 
 /// Runs the whole pipeline, fixed and float, and compares them.
 pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Render> {
-    let f = front(scene, hw)?;
-    let g = geometry(&f, hw, opts)?;
-    let a = accumulate_phase(&f, &g, hw, opts)?;
-    let p = post(&a, scene, hw, opts)?;
+    let mut f = front(scene, hw)?;
+    let mut g = geometry(&f, hw, opts)?;
+    // Log coding: the `logdomain` stage (encoder; potentiation LUT or log accumulation).
+    let mut log_stage = None;
+    if hw.coding.kind != CodingKind::Linear {
+        log_stage = Some(logdomain::encode_phase(&mut f, &mut g, scene, hw)?);
+    }
+    let (a, p, log_stage) = match (hw.coding.kind, log_stage) {
+        (CodingKind::LogAdd, Some(mut r)) => {
+            let (a, add) = logdomain::accumulate_phase(&f, &g, scene, hw, &mut r, opts)?;
+            let p = logdomain::post(&a, &add, scene, hw, opts);
+            (a, p, vec![r])
+        }
+        (_, r) => {
+            let a = accumulate_phase(&f, &g, hw, opts)?;
+            let p = post(&a, scene, hw, opts)?;
+            (a, p, r.into_iter().collect())
+        }
+    };
     let (width, height) = (scene.image.width, scene.image.height);
     let codes = compare::codes(&p.dac, &p.dac_ref, hw.gamma.dac_bits);
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let weber = compare::weber(&p.dac, &p.dac_ref, &display);
     let [r_setup, r_raster, r_vis] = g.reports;
-    let mut stages = vec![f.input, r_setup, r_raster, r_vis, a.report];
+    let mut stages = vec![f.input, r_setup, r_raster, r_vis];
+    stages.extend(log_stage);
+    if hw.coding.kind != CodingKind::LogAdd {
+        stages.push(a.report);
+    }
     stages.extend(p.reports);
     let overflows = stages
         .iter()

@@ -4,6 +4,7 @@
 pub mod accumulate;
 pub mod gamma;
 pub mod input;
+pub mod logdomain;
 pub mod raster;
 pub mod setup;
 pub mod visibility;
@@ -18,6 +19,7 @@ pub const STAGES: &[&str] = &[
     "setup",
     "raster",
     "visibility",
+    "logdomain",
     "accumulate",
     "gamma",
 ];
