@@ -264,14 +264,15 @@ fn chain_of_small_additions_bias_and_order() {
         // 256 equal terms of 1/256 of white each: the sum is white (full scale).
         let small = add.max - (256f64.ln() / K.ln() * add.unit()).round() as i64;
         let equal = chain(&add, &vec![small; 256]);
-        // 64 terms of increasing and decreasing size (same set).
+        // 64 terms of increasing and decreasing size (same set), below full scale.
         let mut rng = 12345u64;
         let mut t: Vec<i64> = (0..64)
             .map(|_| {
                 rng = rng
                     .wrapping_mul(6364136223846793005)
                     .wrapping_add(1442695040888963407);
-                add.off + ((rng >> 33) % (add.max as u64 / 2)) as i64
+                // L in [-1, 0): 64 terms whose sum stays below full scale.
+                add.off - add.unit() as i64 + ((rng >> 33) % (add.unit() as u64)) as i64
             })
             .collect();
         t.sort();
@@ -286,9 +287,9 @@ fn chain_of_small_additions_bias_and_order() {
         let b = bound(&add);
         assert!(equal.abs() <= 255.0 * b, "{name}: {equal}");
         assert!(up.abs() <= 63.0 * b && down.abs() <= 63.0 * b);
-        // Large-first keeps the small terms' roundings relative to a large sum: the
-        // descending chain is no worse than the ascending one.
-        assert!(down.abs() <= up.abs() + b, "{name}: down {down}, up {up}");
+        // Small terms added to a large sum lose their sb (rounded towards the essential
+        // zero); small-first lets them combine first: ascending is no worse than descending.
+        assert!(up.abs() <= down.abs() + b, "{name}: down {down}, up {up}");
     }
 }
 
