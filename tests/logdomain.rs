@@ -430,3 +430,36 @@ fn plan_lists_the_log_stage_only_for_log_coding() {
         }
     }
 }
+
+#[test]
+fn ramp_contours_of_the_preset_codes() {
+    // Default scene display: K = 100, delta = 0.02, gamma = 2.4.
+    let x = ramp(K);
+    let count = |dac: u32, codes: Vec<u16>| {
+        let d = DisplayModel {
+            b_min: 1.0,
+            b_max: K,
+            gamma: 2.4,
+            weber: 0.02,
+            max_code: ((1u64 << dac) - 1) as f64,
+        };
+        ramp_visible_contours(&codes, &d)
+    };
+    for dac in [8, 16] {
+        let lin = |bits| count(dac, ramp_linear(&x, bits, dac, 2.4));
+        let log = |bits| count(dac, ramp_log(&x, K, bits, dac, 2.4));
+        let (l8, l11, l12, l13, g7, g8) = (lin(8), lin(11), lin(12), lin(13), log(7), log(8));
+        eprintln!(
+            "ramp contours, {dac}-bit DAC: linear8 {l8}, linear11 {l11}, linear12 {l12}, linear13 {l13}, log7 {g7}, log8 {g8}"
+        );
+        if dac == 16 {
+            // With a DAC that adds no steps of its own, the code alone decides (eq. 9, 11):
+            // 13 linear bits and 8 log bits (K^(1/255) = 1.0182 < 1.02) show none, 12 linear
+            // bits and 7 log bits (K^(1/127) = 1.037) do.
+            assert_eq!(l13, 0);
+            assert!(l12 > 0 && l11 > l12 && l8 > l11);
+            assert_eq!(g8, 0);
+            assert_eq!(g7, 127, "every step of a 7-bit log code is visible");
+        }
+    }
+}

@@ -691,6 +691,9 @@ pub fn encode_phase(
     Ok(r)
 }
 
+/// One pixel of the log frame: code, nearest depth, coverage.
+type PixelOut = (u32, u32, u16);
+
 /// Structure (b): log-domain accumulation of the (log-coded) samples into a log frame
 /// memory, fixed model and exact reference; the float image is the spine's.
 pub fn accumulate_phase(
@@ -730,7 +733,7 @@ pub fn accumulate_phase(
         let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
         (c0, r0)
     };
-    let rows: Vec<(Vec<(u32, u32, u16)>, LogWork)> = (region.y0..region.y1)
+    let rows: Vec<(Vec<PixelOut>, LogWork)> = (region.y0..region.y1)
         .into_par_iter()
         .map(|py| {
             let mut wk = LogWork::default();
