@@ -463,3 +463,46 @@ fn ramp_contours_of_the_preset_codes() {
         }
     }
 }
+
+#[test]
+fn cli_widths_scene_validates_by_emulation() {
+    let (code, out, err) = igemu(&["widths", "--scene", "default", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["contrast"], 100.0);
+    assert_eq!(v["linear"]["bits"], 13);
+    let checks = v["validation"].as_array().unwrap();
+    assert_eq!(checks.len(), 6);
+    for c in checks {
+        let contours = c["contours"].as_u64().unwrap();
+        let rec = c["recommended"].as_bool().unwrap();
+        assert_eq!(
+            c["disagrees"].as_bool().unwrap(),
+            (contours > 0) == rec,
+            "{c}"
+        );
+    }
+    // The linear recommendation (13 bits, 9-bit DAC) emulates clean; one bit less does not.
+    assert_eq!(checks[0]["coding"], "linear");
+    assert_eq!(checks[0]["contours"], 0);
+    assert!(checks[1]["contours"].as_u64().unwrap() > 0);
+    // Text form states disagreements plainly.
+    let (code, out, _) = igemu(&["widths", "--scene", "default"]);
+    assert_eq!(code, 0);
+    let any = checks.iter().any(|c| c["disagrees"].as_bool().unwrap());
+    assert_eq!(out.contains("DISAGREES"), any, "{out}");
+    // Flags override the scene; neither given is bad input.
+    let (code, out, _) = igemu(&["widths", "--scene", "default", "--weber", "0.05", "--json"]);
+    assert_eq!(code, 0);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["linear"]["bits"], 11);
+    let (code, _, err) = igemu(&["widths", "--weber", "0.05"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--contrast"), "{err}");
+    let scene =
+        include_str!("../src/scene/default.toml").replace("contrast = 100.0", "contrast = 1.0");
+    let p = write("bad-scene.toml", &scene);
+    let (code, _, err) = igemu(&["widths", "--scene", &p]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("display.contrast"), "{err}");
+}
