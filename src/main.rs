@@ -36,7 +36,7 @@ enum Cmd {
 struct SceneArgs {
     /// Scene TOML file or embedded scene name (default: the embedded default scene).
     scene: Option<String>,
-    /// Hardware config: a preset (linear12, linear11, linear8) or a TOML file.
+    /// Hardware config: a preset (linear12, linear11, linear8, log8-potentiate, log8-logadd, log7-logadd) or a TOML file.
     #[arg(long)]
     hw: Option<String>,
 }

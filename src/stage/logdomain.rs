@@ -70,6 +70,18 @@ pub enum CodingKind {
 }
 
 /// The `[coding]` section of the hardware file.
+///
+/// ```toml
+/// [coding]
+/// kind = "log-add"        # "linear" | "log-potentiate" | "log-add"
+/// log_bits = 8            # sample log code, 3..=12 bits (2^b - 1 grades)
+/// acc_frac_bits = 2       # log frame word: extra fraction bits below a grade, 0..=8
+/// table_addr_bits = 10    # sb table address, 4..=16 bits
+/// table_frac_bits = 0     # sb table data: fraction bits below the frame LSB, 0..=12
+/// interpolate = false     # linear interpolation between sb entries
+/// ```
+/// Defaults (all presets): `acc_frac_bits = 2` (`log7-logadd`: 3), `table_addr_bits = 10`,
+/// `table_frac_bits = 0`, `interpolate = false`; linear presets have `kind = "linear"`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CodingCfg {
     /// Linear or one of the two log structures.

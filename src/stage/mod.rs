@@ -19,7 +19,6 @@ pub const STAGES: &[&str] = &[
     "setup",
     "raster",
     "visibility",
-    "logdomain",
     "accumulate",
     "gamma",
 ];
