@@ -14,7 +14,14 @@ pub const MAX_LUT_ADDRESS_BITS: u32 = 20;
 /// Largest guard band beyond the screen edge, in pixels.
 pub const MAX_GUARD_BAND: u32 = 4096;
 /// Preset names, the first is the default.
-pub const PRESETS: &[&str] = &["linear12", "linear11", "linear8"];
+pub const PRESETS: &[&str] = &[
+    "linear12",
+    "linear11",
+    "linear8",
+    "log8-potentiate",
+    "log8-logadd",
+    "log7-logadd",
+];
 
 /// Filter used to turn sub-pixel samples into pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -121,6 +128,8 @@ pub struct HwConfig {
     pub dither: crate::stage::dither::DitherCfg,
     /// Depth of field (used only with a thin-lens camera).
     pub dof: crate::stage::dof::DofParams,
+    /// Intensity coding of the stored samples and the frame memory (linear or log).
+    pub coding: crate::stage::logdomain::CodingCfg,
 }
 
 const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Quantizer {
@@ -130,11 +139,11 @@ const fn q(signed: bool, i: u32, f: u32, quant: Quant, overflow: Overflow) -> Qu
 impl HwConfig {
     /// A preset by name.
     pub fn preset(name: &str) -> Option<HwConfig> {
-        let acc_bits = match name {
-            "linear12" => 12,
-            "linear11" => 11,
-            "linear8" => 8,
-            _ => return None,
+        let (acc_bits, coding) = match name {
+            "linear12" => (12, crate::stage::logdomain::CodingCfg::linear()),
+            "linear11" => (11, crate::stage::logdomain::CodingCfg::linear()),
+            "linear8" => (8, crate::stage::logdomain::CodingCfg::linear()),
+            _ => (12, crate::stage::logdomain::CodingCfg::preset(name)?),
         };
         Some(HwConfig {
             name: name.to_string(),
@@ -180,6 +189,7 @@ impl HwConfig {
                 quant: Quant::RndConv,
                 overflow: Overflow::Sat,
             },
+            coding,
         })
     }
 
@@ -281,6 +291,9 @@ impl HwConfig {
             set(&mut hw.dof.max_half_size, d.max_half_size);
             set(&mut hw.dof.quant, d.quant);
             set(&mut hw.dof.overflow, d.overflow);
+        }
+        if let Some(c) = raw.coding {
+            c.apply(&mut hw.coding);
         }
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
@@ -419,6 +432,15 @@ impl HwConfig {
         self.cycles.validate()?;
         self.dither.validate(acc.int_bits, d)?;
         crate::stage::dof::validate(&self.dof)?;
+        self.coding.validate()?;
+        if self.coding.kind == crate::stage::logdomain::CodingKind::LogAdd
+            && self.dither.kind != crate::stage::dither::DitherKind::None
+        {
+            return err(
+                "dither.kind",
+                "dithering is modelled after the linear gamma LUT only; with coding.kind = \"log-add\" use kind = \"none\" (or log-potentiate)".into(),
+            );
+        }
         Ok(())
     }
 
@@ -446,6 +468,7 @@ struct RawHw {
     cycles: Option<crate::cycles::RawCycles>,
     dither: Option<crate::stage::dither::RawDither>,
     dof: Option<RawDof>,
+    coding: Option<crate::stage::logdomain::RawCoding>,
 }
 
 #[derive(Deserialize)]

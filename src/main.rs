@@ -81,7 +81,7 @@ enum FilterArg {
 struct SceneArgs {
     /// Scene TOML file or embedded scene name (default: the embedded default scene).
     scene: Option<String>,
-    /// Hardware config: a preset (linear12, linear11, linear8) or a TOML file.
+    /// Hardware config: a preset (linear12, linear11, linear8, log8-potentiate, log8-logadd, log7-logadd) or a TOML file.
     #[arg(long)]
     hw: Option<String>,
 }
@@ -139,15 +139,18 @@ struct CheckArgs {
 
 #[derive(Args)]
 struct WidthsArgs {
-    /// Contrast K = B_max / B_min (> 1).
+    /// Contrast K = B_max / B_min (> 1); default: the scene's display block.
     #[arg(long)]
-    contrast: f64,
-    /// Weber fraction delta (0 < delta < 1).
+    contrast: Option<f64>,
+    /// Weber fraction delta (0 < delta < 1); default: the scene's display block.
     #[arg(long)]
-    weber: f64,
-    /// Display gamma (> 1).
-    #[arg(long, default_value_t = 2.4)]
-    gamma: f64,
+    weber: Option<f64>,
+    /// Display gamma (> 1); default: the scene's display block, else 2.4.
+    #[arg(long)]
+    gamma: Option<f64>,
+    /// Take contrast, Weber fraction and gamma from this scene's display block (flags override).
+    #[arg(long)]
+    scene: Option<String>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -215,12 +218,33 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
         Cmd::Check(a) => check(a),
         Cmd::Cycles(a) => cycles(a),
         Cmd::Widths(a) => {
-            let w =
-                calc::widths(a.contrast, a.weber, a.gamma).map_err(|m| arg_error("widths", m))?;
+            let display = match &a.scene {
+                Some(p) => Some(load_scene(Some(p))?.display),
+                None => None,
+            };
+            let need = |v: Option<f64>, d: Option<f64>, flag: &str| {
+                v.or(d).ok_or_else(|| {
+                    arg_error(
+                        flag,
+                        format!("give {flag} or --scene FILE (its display block)"),
+                    )
+                })
+            };
+            let contrast = need(
+                a.contrast,
+                display.as_ref().map(|d| d.contrast),
+                "--contrast",
+            )?;
+            let weber = need(a.weber, display.as_ref().map(|d| d.weber), "--weber")?;
+            let gamma = a.gamma.or(display.as_ref().map(|d| d.gamma)).unwrap_or(2.4);
+            let w = calc::widths(contrast, weber, gamma).map_err(|m| arg_error("widths", m))?;
+            let checks = igemu::stage::logdomain::validate_widths(&w);
             if a.json {
+                let mut v = serde_json::to_value(&w).expect("serialisable");
+                v["validation"] = serde_json::to_value(&checks).expect("serialisable");
                 println!(
                     "{}",
-                    serde_json::to_string_pretty(&w).expect("serialisable")
+                    serde_json::to_string_pretty(&v).expect("serialisable")
                 );
             } else {
                 println!(
@@ -243,6 +267,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
                     "  largest contrast an 8-bit linear code holds: K = {:.2}",
                     w.linear8_max_contrast
                 );
+                print_width_checks(&checks, w.weber);
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -568,6 +593,39 @@ fn print_cycles(c: &igemu::cycles::CycleReport) {
         c.sim.wall_ms,
         c.sim.cycles_per_s / 1e6
     );
+}
+
+fn print_width_checks(checks: &[igemu::stage::logdomain::RampCheck], weber: f64) {
+    println!(
+        "validation by emulation: a {}-sample ramp over the full contrast, quantised and through the gamma LUT;",
+        igemu::stage::logdomain::RAMP_SAMPLES
+    );
+    println!("  contours = adjacent output steps with a luminance ratio above 1 + {weber}");
+    println!(
+        "  {:<7} {:>9} {:>8} {:>12} {:>8} {:>9}  verdict",
+        "coding", "code bits", "DAC bits", "widths", "levels", "contours"
+    );
+    for c in checks {
+        let verdict = match (c.recommended, c.disagrees) {
+            (true, false) => "0 as theory predicts",
+            (false, false) => "visible, as theory predicts",
+            (true, true) => "DISAGREES with theory: contours at the recommended widths",
+            (false, true) => "DISAGREES with theory: no visible contour one bit narrower",
+        };
+        println!(
+            "  {:<7} {:>9} {:>8} {:>12} {:>8} {:>9}  {verdict}",
+            c.coding,
+            c.code_bits,
+            c.dac_bits,
+            if c.recommended {
+                "recommended"
+            } else {
+                "1 bit less"
+            },
+            c.levels,
+            c.contours
+        );
+    }
 }
 
 fn fmt_work(w: &std::collections::BTreeMap<String, u64>) -> String {

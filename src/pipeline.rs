@@ -13,6 +13,7 @@ use crate::scene::{GuardBand, HostScene, Primitive, Scene, front_end};
 use crate::stage::accumulate::{self, AccParams, AccRef, Frame, Kernel, PointFrags};
 use crate::stage::gamma::{self, GammaLut, GammaSpec};
 use crate::stage::input::{self, QPrim};
+use crate::stage::logdomain::{self, CodingKind};
 use crate::stage::raster::{
     self, FPrim, FVertex, Frag, FragF, RasterParams, RasterWork, SampleRegion,
 };
@@ -787,18 +788,48 @@ pub fn render_ext(
     opts: RenderOptions,
     dof_reference: bool,
 ) -> Result<Render> {
-    let f = front(scene, hw)?;
-    let g = geometry(&f, hw, opts)?;
-    let mut a = accumulate_phase(&f, &g, hw, opts)?;
-    let r_dof = crate::stage::dof::run_stage(
-        scene,
-        hw,
-        &mut a.frame,
-        &mut a.frame_ref,
-        opts.stage_local,
-        dof_reference,
-    )?;
-    let p = post(&a, scene, hw, opts)?;
+    let log_add = hw.coding.kind == CodingKind::LogAdd;
+    if log_add && !matches!(scene.camera.lens, crate::scene::Lens::Pinhole) {
+        return Err(FileError {
+            file: hw.name.clone(),
+            line: None,
+            col: None,
+            field: "coding.kind".into(),
+            msg: format!(
+                "log-add keeps a log-coded frame memory, but scene `{}` has a thin lens and depth of field needs a linear frame; use log-potentiate, or a pinhole scene (e.g. the embedded `default-pinhole`)",
+                scene.name
+            ),
+        }
+        .into());
+    }
+    let mut f = front(scene, hw)?;
+    let mut g = geometry(&f, hw, opts)?;
+    // Log coding: the `logdomain` stage (encoder; potentiation LUT or log accumulation).
+    let log_stage = if hw.coding.kind != CodingKind::Linear {
+        Some(logdomain::encode_phase(&mut f, &mut g, scene, hw)?)
+    } else {
+        None
+    };
+    let (a, p, log_stage, r_dof) = match (log_add, log_stage) {
+        (true, Some(mut r)) => {
+            let (a, add) = logdomain::accumulate_phase(&f, &g, scene, hw, &mut r, opts)?;
+            let p = logdomain::post(&a, &add, scene, hw, opts);
+            (a, p, vec![r], None)
+        }
+        (_, r) => {
+            let mut a = accumulate_phase(&f, &g, hw, opts)?;
+            let r_dof = crate::stage::dof::run_stage(
+                scene,
+                hw,
+                &mut a.frame,
+                &mut a.frame_ref,
+                opts.stage_local,
+                dof_reference,
+            )?;
+            let p = post(&a, scene, hw, opts)?;
+            (a, p, r.into_iter().collect(), r_dof)
+        }
+    };
     let (width, height) = (scene.image.width, scene.image.height);
     let codes = compare::codes(&p.dac, &p.dac_ref, hw.gamma.dac_bits);
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
@@ -820,7 +851,11 @@ pub fn render_ext(
         crate::perceptual::contours(&p.dac, &p.dac_ref, &ideal, &display, width, height)
     };
     let [r_setup, r_raster, r_vis] = g.reports;
-    let mut stages = vec![f.input, r_setup, r_raster, r_vis, a.report];
+    let mut stages = vec![f.input, r_setup, r_raster, r_vis];
+    stages.extend(log_stage);
+    if !log_add {
+        stages.push(a.report);
+    }
     stages.extend(r_dof);
     stages.extend(p.reports);
     let overflows = stages

@@ -345,6 +345,13 @@ impl Scene {
     /// An embedded scene by name (see [`EMBEDDED`]); `None` if there is no such name.
     /// An embedded scene that fails validation also gives `None` (the tests rule that out).
     pub fn embedded(name: &str) -> Option<Scene> {
+        if name == "default-pinhole" {
+            // The default scene with a pinhole camera: everything in focus, no dof stage.
+            let mut s = Self::default_scene();
+            s.name = name.to_string();
+            s.camera.lens = Lens::Pinhole;
+            return Some(s);
+        }
         let (n, text) = EMBEDDED.iter().find(|(n, _)| *n == name)?;
         let file = TomlFile::from_text(&format!("<embedded scene {n}>"), text);
         Self::from_toml(&file).ok()

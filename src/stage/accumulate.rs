@@ -437,7 +437,7 @@ pub fn accumulate_tiles(
 
 /// For a light point: each pixel of the region it touches with the summed filter weight
 /// `S` of its visible samples (`weight(e)` gives the kernel entry `e`).
-fn point_weights(
+pub fn point_weights(
     pt: &PointFrags<impl Copy>,
     reg: &SampleRegion,
     region: &Region,

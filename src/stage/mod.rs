@@ -6,6 +6,7 @@ pub mod dither;
 pub mod dof;
 pub mod gamma;
 pub mod input;
+pub mod logdomain;
 pub mod raster;
 pub mod setup;
 pub mod visibility;
