@@ -396,7 +396,8 @@ fn cli_bad_input_exits_2_with_field_and_range() {
 
 #[test]
 fn plan_lists_the_log_stage_only_for_log_coding() {
-    let scene = igemu::scene::Scene::default_scene();
+    // A pinhole camera: the log-add frame memory is log-coded and plans no dof stage.
+    let scene = igemu::scene::Scene::embedded("default-pinhole").unwrap();
     let opts = igemu::pipeline::RenderOptions { stage_local: false };
     for (preset, stages) in [
         ("linear12", "input setup raster visibility accumulate gamma"),
@@ -505,4 +506,18 @@ fn cli_widths_scene_validates_by_emulation() {
     let (code, _, err) = igemu(&["widths", "--scene", &p]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("display.contrast"), "{err}");
+}
+
+#[test]
+fn log_add_refuses_depth_of_field_and_dither() {
+    let hw = igemu::hw::HwConfig::preset("log8-logadd").unwrap();
+    let opts = igemu::pipeline::RenderOptions { stage_local: false };
+    match igemu::pipeline::render(&igemu::scene::Scene::default_scene(), &hw, opts) {
+        Err(e) => assert!(e.to_string().contains("coding.kind"), "{e}"),
+        Ok(_) => panic!("a thin-lens scene with log-add must be refused"),
+    }
+    let mut hw = hw;
+    hw.dither.kind = igemu::stage::dither::DitherKind::Bayer4;
+    let (field, _) = hw.validate().unwrap_err();
+    assert_eq!(field, "dither.kind");
 }
