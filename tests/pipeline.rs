@@ -17,7 +17,24 @@ fn run(s: &Scene, h: &HwConfig) -> Render {
 fn default_scene_renders_and_reports_every_stage() {
     let r = run(&Scene::default_scene(), &HwConfig::default_config());
     let names: Vec<&str> = r.report.stages.iter().map(|s| s.name.as_str()).collect();
-    assert_eq!(names, igemu::stage::STAGES);
+    assert_eq!(
+        names,
+        [
+            "input",
+            "setup",
+            "raster",
+            "visibility",
+            "accumulate",
+            "dof",
+            "gamma"
+        ]
+    );
+    // The plan is a subsequence of the flow order.
+    let pos: Vec<usize> = names
+        .iter()
+        .map(|n| igemu::stage::STAGES.iter().position(|s| s == n).unwrap())
+        .collect();
+    assert!(pos.windows(2).all(|w| w[0] < w[1]));
     assert_eq!(r.dac.len(), 640 * 480);
     let c = &r.report.end_to_end.codes;
     eprintln!(

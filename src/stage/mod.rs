@@ -15,15 +15,19 @@ use crate::fixed::SignalStats;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Stage names in flow order (the same names are used in `tests/`, `benches/`, `hdl-models/`).
+/// Every stage name in flow order (the same names are used in `tests/`, `benches/`,
+/// `hdl-models/`). A plan runs a subsequence: `logdomain` only for log coding, `dof` only
+/// for a thin lens, `dither` only when configured (before or after `gamma`).
 pub const STAGES: &[&str] = &[
     "input",
     "setup",
     "raster",
     "visibility",
+    "logdomain",
     "accumulate",
     "dof",
     "gamma",
+    "dither",
 ];
 
 /// A hardware unit of one kind: `count` units of `width` bits (multipliers: `width` x `width_b`).
