@@ -25,18 +25,38 @@ pub fn round_shift(raw: i128, shift: u32, q: Quant) -> i128 {
         return floor;
     }
     let half = 1i128 << (shift - 1);
-    let up = match q {
+    floor
+        + i128::from(rounds_up(
+            q,
+            raw < 0,
+            floor < 0,
+            floor & 1 != 0,
+            rem.cmp(&half),
+        ))
+}
+
+/// Whether a value with a non-zero discarded part rounds up from its floor. `rem_vs_half`
+/// compares the discarded part with one half; on an exact tie the value is `floor + 1/2`,
+/// negative iff `floor < 0`.
+#[inline]
+fn rounds_up(
+    q: Quant,
+    negative: bool,
+    floor_negative: bool,
+    floor_odd: bool,
+    rem_vs_half: std::cmp::Ordering,
+) -> bool {
+    use std::cmp::Ordering::Equal;
+    match q {
         Quant::Trn => false,
-        Quant::TrnZero => raw < 0,
-        _ if rem != half => rem > half,
-        // Exact tie: the value is floor + 1/2, negative iff floor < 0.
+        Quant::TrnZero => negative,
+        _ if rem_vs_half != Equal => rem_vs_half == std::cmp::Ordering::Greater,
         Quant::Rnd => true,
-        Quant::RndZero => floor < 0,
-        Quant::RndInf => floor >= 0,
+        Quant::RndZero => floor_negative,
+        Quant::RndInf => !floor_negative,
         Quant::RndMinInf => false,
-        Quant::RndConv => floor & 1 != 0,
-    };
-    floor + i128::from(up)
+        Quant::RndConv => floor_odd,
+    }
 }
 
 /// [`round_shift`] for the hot loops: the same rounding on `i64` (`shift` in 0..=62).
@@ -53,17 +73,14 @@ pub fn round_shift_i64(raw: i64, shift: u32, q: Quant) -> i64 {
         return floor;
     }
     let half = 1i64 << (shift - 1);
-    let up = match q {
-        Quant::Trn => false,
-        Quant::TrnZero => raw < 0,
-        _ if rem != half => rem > half,
-        Quant::Rnd => true,
-        Quant::RndZero => floor < 0,
-        Quant::RndInf => floor >= 0,
-        Quant::RndMinInf => false,
-        Quant::RndConv => floor & 1 != 0,
-    };
-    floor + i64::from(up)
+    floor
+        + i64::from(rounds_up(
+            q,
+            raw < 0,
+            floor < 0,
+            floor & 1 != 0,
+            rem.cmp(&half),
+        ))
 }
 
 /// A quantised code and whether the overflow mode had to act.

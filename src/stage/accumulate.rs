@@ -223,6 +223,25 @@ impl AccParams {
     }
 }
 
+/// Nearest depth code and covered-sample count of a pixel's own `n x n` samples, given the
+/// buffer index `window` of its filter window's first sample.
+#[inline]
+pub fn own_depth_coverage(s: &Samples, k: &Kernel, window: usize, sw: usize) -> (u32, u16) {
+    let n = k.n as usize;
+    let own0 = window + k.off as usize * sw + k.off as usize;
+    let (mut zmin, mut cov) = (u32::MAX, 0u16);
+    for j in 0..n {
+        for i in 0..n {
+            let idx = own0 + j * sw + i;
+            if s.prim[idx] != BACKGROUND {
+                cov += 1;
+                zmin = zmin.min(s.z[idx]);
+            }
+        }
+    }
+    (zmin, cov)
+}
+
 /// Sums `w * I` per primitive over a pixel's window starting at buffer index `base`.
 fn group_window(s: &Samples, k: &Kernel, base: usize, sw: usize, frags: &mut Vec<(u32, i64)>) {
     let mut last = usize::MAX;
@@ -316,7 +335,7 @@ pub fn accumulate_tiles(
         coverage: vec![0; npix],
     };
     let k = &p.kernel;
-    let (n, size_w) = (k.n as usize, k.size);
+    let size_w = k.size;
     let sw = s.reg.width();
     let rows: Vec<Result<RowOut>> = (region.y0..region.y1)
         .into_par_iter()
@@ -374,17 +393,7 @@ pub fn accumulate_tiles(
                     out.tile_rmw[(px / t.size) as usize] += frags.len() as u64;
                 }
                 // Depth and coverage of the pixel's own samples.
-                let (mut zmin, mut cov) = (u32::MAX, 0u16);
-                let own0 = (r0 + k.off as usize) * sw + c0 + k.off as usize;
-                for j in 0..n {
-                    for i in 0..n {
-                        let idx = own0 + j * sw + i;
-                        if s.prim[idx] != BACKGROUND {
-                            cov += 1;
-                            zmin = zmin.min(s.z[idx]);
-                        }
-                    }
-                }
+                let (zmin, cov) = own_depth_coverage(s, k, r0 * sw + c0, sw);
                 out.acc.push(acc as u32);
                 out.depth.push(zmin);
                 out.cov.push(cov);

@@ -588,7 +588,6 @@ pub fn ramp_visible_contours(dac: &[u16], display: &DisplayModel) -> usize {
 // ---------------------------------------------------------------------------------------
 
 use super::accumulate::{self, AccRef, Frame};
-use super::visibility::BACKGROUND;
 use super::{StageReport, ms_since};
 use crate::error::{Error, FileError, Result};
 use crate::hw::HwConfig;
@@ -725,7 +724,6 @@ pub fn accumulate_phase(
     let t = Instant::now();
     let s = &g.samples;
     let sw = s.reg.width();
-    let n = k.n as usize;
     let mut work = LogWork::default();
     let bg_code = accumulate_pixel(
         &add,
@@ -758,17 +756,7 @@ pub fn accumulate_phase(
                         terms.map(|(j, i)| (s.i[(r0 + j) * sw + c0 + i], k.w[j * k.size + i])),
                         &mut wk,
                     );
-                    let (mut zmin, mut cov) = (u32::MAX, 0u16);
-                    let own0 = (r0 + k.off as usize) * sw + c0 + k.off as usize;
-                    for j in 0..n {
-                        for i in 0..n {
-                            let idx = own0 + j * sw + i;
-                            if s.prim[idx] != BACKGROUND {
-                                cov += 1;
-                                zmin = zmin.min(s.z[idx]);
-                            }
-                        }
-                    }
+                    let (zmin, cov) = accumulate::own_depth_coverage(s, k, r0 * sw + c0, sw);
                     (a as u32, zmin, cov)
                 })
                 .collect();
