@@ -34,6 +34,30 @@ enum Cmd {
     Cycles(CyclesArgs),
     /// Small-object flicker: a light point and a thin line swept over 32x32 sub-pixel phases.
     Flicker(FlickerArgs),
+    /// HDL co-simulation of the Verilog models in hdl-models/ (see hdl-models/README.md).
+    #[command(subcommand)]
+    Hdl(HdlCmd),
+}
+
+#[derive(Subcommand)]
+enum HdlCmd {
+    /// Write a stage's vectors (scene taps, exhaustive, random), ROM files and params.vh to a directory.
+    Vectors(HdlVectorsArgs),
+}
+
+#[derive(Args)]
+struct HdlVectorsArgs {
+    /// Stage: gamma, accumulate, dither, logdomain.
+    #[arg(long)]
+    stage: String,
+    #[command(flatten)]
+    s: SceneArgs,
+    /// Output directory.
+    #[arg(long)]
+    out: String,
+    /// Also run the testbench under Icarus Verilog (exit 1 when it fails).
+    #[arg(long)]
+    run: bool,
 }
 
 #[derive(Args)]
@@ -272,6 +296,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Flicker(a) => flicker(a),
+        Cmd::Hdl(HdlCmd::Vectors(a)) => hdl_vectors(a),
         Cmd::Dof(a) => {
             let d = calc::depth_of_field(a.f_number, a.coc, a.focal, a.distance)
                 .map_err(|m| arg_error("dof", m))?;
@@ -817,4 +842,44 @@ fn flicker(a: FlickerArgs) -> Result<ExitCode, Error> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn hdl_vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
+    use igemu::hdl;
+    let scene = load_scene(a.s.scene.as_deref())?;
+    let hw = HwConfig::resolve(a.s.hw.as_deref())?;
+    let b = hdl::vectors(&a.stage, &scene, &hw)?;
+    let dir = std::path::Path::new(&a.out);
+    b.write(dir)?;
+    let src: Vec<String> = b.sources.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    println!(
+        "hdl vectors | stage {} (module {}) | hardware `{}` | {} vectors ({}) | {}",
+        b.stage,
+        b.module,
+        hw.name,
+        b.vectors.len(),
+        src.join(", "),
+        dir.display()
+    );
+    let params: Vec<String> = b.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    println!("parameters: {}", params.join(" "));
+    if !a.run {
+        return Ok(ExitCode::SUCCESS);
+    }
+    let t = std::time::Instant::now();
+    let v = hdl::run_icarus(b.module, dir).map_err(|m| arg_error("--run", m))?;
+    let secs = t.elapsed().as_secs_f64();
+    match v {
+        hdl::Verdict::Ok(n) => {
+            println!(
+                "icarus: TESTBENCH OK {n} vectors in {secs:.2} s (compile + simulate, {:.0} vectors/s)",
+                n as f64 / secs
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        hdl::Verdict::Failed(m) => {
+            println!("icarus: TESTBENCH FAILED: {m}");
+            Ok(ExitCode::from(1))
+        }
+    }
 }
