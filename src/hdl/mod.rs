@@ -19,8 +19,12 @@ use crate::stage::gamma::{GammaLut, GammaSpec};
 use crate::stage::input::QPrim;
 use crate::stage::logdomain::{CodingKind, LogAdder, log_code};
 use std::fmt::Write as _;
+use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::Instant;
+
+pub mod synth;
 
 /// Stages with an HDL model: (stage name, Verilog module).
 pub const MODULES: &[(&str, &str)] = &[
@@ -57,6 +61,9 @@ pub struct Bench {
     pub vectors: Vec<Vec<u64>>,
     /// Vectors from each source: (source, count).
     pub sources: Vec<(&'static str, usize)>,
+    /// Wall time of the Rust model re-evaluating every vector once (nanoseconds; the
+    /// per-vector model call, including building its output row).
+    pub model_ns: u64,
 }
 
 /// A testbench's verdict.
@@ -178,6 +185,7 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
         fields: vec![],
         vectors: vec![],
         sources: vec![],
+        model_ns: 0,
     };
     match stage {
         "gamma" => {
@@ -209,6 +217,11 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
                 b.vectors.push(one(rng.bits(acc_bits) as u32));
             }
             b.sources.push(("random", RANDOM));
+            let t = Instant::now();
+            for v in &b.vectors {
+                black_box(one(black_box(v[0] as u32)));
+            }
+            b.model_ns = t.elapsed().as_nanos() as u64;
         }
         "accumulate" => {
             let f = pipeline::front(scene, hw)?;
@@ -294,6 +307,11 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
                     .push(one(w, rng.bits(ib) as u32, rng.bits(acc_bits) as u32));
             }
             b.sources.push(("random", RANDOM));
+            let t = Instant::now();
+            for v in &b.vectors {
+                black_box(one(v[0] as u32, v[1] as u32, black_box(v[2] as u32)));
+            }
+            b.model_ns = t.elapsed().as_nanos() as u64;
         }
         "dither" => {
             // The configured mask; without an ordered dither configured, Bayer 4x4.
@@ -358,6 +376,12 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
                 ));
             }
             b.sources.push(("random", RANDOM));
+            let t = Instant::now();
+            for v in &b.vectors {
+                let off = (v[3] as u32, v[4] as u32);
+                black_box(one(black_box(v[0] as u32), v[1] as u32, v[2] as u32, off));
+            }
+            b.model_ns = t.elapsed().as_nanos() as u64;
         }
         "logdomain" => {
             if hw.coding.kind != CodingKind::LogAdd {
@@ -417,6 +441,11 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
                 b.vectors.push(one(a, c));
             }
             b.sources.push(("random", RANDOM));
+            let t = Instant::now();
+            for v in &b.vectors {
+                black_box(one(black_box(v[0] as i64), v[1] as i64));
+            }
+            b.model_ns = t.elapsed().as_nanos() as u64;
         }
         _ => unreachable!("module_of checked the name"),
     }
@@ -481,11 +510,28 @@ pub fn available(prog: &str) -> bool {
         .is_ok()
 }
 
+/// A testbench run: verdict and wall times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimRun {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// iverilog compile time (seconds).
+    pub compile_s: f64,
+    /// vvp simulation time, including reading the vector file (seconds).
+    pub sim_s: f64,
+}
+
 /// Compiles and runs the testbench of `module` on the bench in `dir` under Icarus Verilog;
 /// returns the verdict, or the simulator's output when there is none.
 pub fn run_icarus(module: &str, dir: &Path) -> std::result::Result<Verdict, String> {
+    run_icarus_timed(module, dir).map(|r| r.verdict)
+}
+
+/// [`run_icarus`] with the compile and simulation wall times.
+pub fn run_icarus_timed(module: &str, dir: &Path) -> std::result::Result<SimRun, String> {
     let m = models_dir();
     let sim = dir.join("sim.vvp");
+    let t = Instant::now();
     let c = Command::new("iverilog")
         .arg("-g2005")
         .arg("-I")
@@ -502,17 +548,25 @@ pub fn run_icarus(module: &str, dir: &Path) -> std::result::Result<Verdict, Stri
             String::from_utf8_lossy(&c.stderr)
         ));
     }
+    let compile_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
     let r = Command::new("vvp")
         .arg("-n")
         .arg(&sim)
         .current_dir(dir)
         .output()
         .map_err(|e| format!("vvp: {e}"))?;
+    let sim_s = t.elapsed().as_secs_f64();
     let out = String::from_utf8_lossy(&r.stdout).to_string();
-    parse_verdict(&out).ok_or_else(|| {
+    let verdict = parse_verdict(&out).ok_or_else(|| {
         format!(
             "no single verdict line in the output: {out}{}",
             String::from_utf8_lossy(&r.stderr)
         )
+    })?;
+    Ok(SimRun {
+        verdict,
+        compile_s,
+        sim_s,
     })
 }
