@@ -915,13 +915,8 @@ fn cost(a: CostArgs) -> Result<ExitCode, Error> {
         }
     );
     println!(
-        "{:<11} {:>12} {:>10} {:>7} {:>6}  {}",
-        "stage",
-        "storage_bits",
-        "lut_bits",
-        "adders",
-        "mults",
-        "HDL model: yosys cells (flip-flops)"
+        "{:<11} {:>12} {:>10} {:>7} {:>6}  HDL model: yosys cells (flip-flops)",
+        "stage", "storage_bits", "lut_bits", "adders", "mults"
     );
     let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("target")

@@ -54,10 +54,8 @@ pub fn parse_stat(module: &str, text: &str) -> Option<SynthCells> {
             cells = r.trim().parse().ok();
         } else if t.starts_with('$') && cells.is_some() {
             let mut it = t.split_whitespace();
-            if let (Some(k), Some(v)) = (it.next(), it.next()) {
-                if let Ok(v) = v.parse() {
-                    by_type.insert(k.to_string(), v);
-                }
+            if let (Some(k), Some(Ok(v))) = (it.next(), it.next().map(str::parse)) {
+                by_type.insert(k.to_string(), v);
             }
         }
     }
@@ -83,11 +81,12 @@ pub fn synth(b: &Bench, cache: &Path) -> Result<SynthCells> {
     let h = fnv(&[&src, params.as_bytes(), roms.as_bytes()]);
     let dir: PathBuf = cache.join(format!("{}-{h:016x}", b.module));
     let stat = dir.join("stat.txt");
-    if let Ok(t) = std::fs::read_to_string(&stat) {
-        if let Some(mut c) = parse_stat(b.module, &t) {
-            c.cached = true;
-            return Ok(c);
-        }
+    if let Some(mut c) = std::fs::read_to_string(&stat)
+        .ok()
+        .and_then(|t| parse_stat(b.module, &t))
+    {
+        c.cached = true;
+        return Ok(c);
     }
     let mut rom_only = b.clone();
     rom_only.vectors.clear();
