@@ -58,7 +58,7 @@ enum HdlCmd {
 
 #[derive(Args)]
 struct HdlVectorsArgs {
-    /// Stage: gamma, accumulate, dither, logdomain.
+    /// Stage: gamma, accumulate, dither, logdomain (log-add hardware), setup (edge stepper).
     #[arg(long)]
     stage: String,
     #[command(flatten)]

@@ -163,6 +163,20 @@ fn log_adder_agrees_at_three_settings() {
 }
 
 #[test]
+fn edge_stepper_agrees_on_scene_edges_at_two_grids() {
+    let sc = small_scene();
+    let cfgs = [
+        ("samples2", hw("linear12", |h| h.raster.samples = 2)),
+        ("samples8", hw("linear12", |h| h.raster.samples = 8)),
+    ];
+    let b = hdl::vectors("setup", &sc, &cfgs[1].1).expect("bench");
+    // Loads and steps, some steps with the extra column carry.
+    assert!(b.vectors.iter().filter(|v| v[0] == 1).count() >= 6);
+    assert!(b.vectors.iter().any(|v| v[0] == 0 && v[8] == 1));
+    agree("setup", &cfgs, &sc);
+}
+
+#[test]
 fn a_broken_vector_fails_the_testbench() {
     if !icarus("broken vector") {
         return;

@@ -18,6 +18,7 @@ use crate::stage::dither::{Mask, extended_lut, ordered_code};
 use crate::stage::gamma::{GammaLut, GammaSpec};
 use crate::stage::input::QPrim;
 use crate::stage::logdomain::{CodingKind, LogAdder, log_code};
+use crate::stage::setup::Edge;
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -32,6 +33,7 @@ pub const MODULES: &[(&str, &str)] = &[
     ("accumulate", "acc_mac"),
     ("dither", "dither_ordered"),
     ("logdomain", "log_adder"),
+    ("setup", "edge_stepper"),
 ];
 
 /// The Verilog module of a stage name, if it has one.
@@ -140,6 +142,8 @@ fn frame_taps(scene: &Scene, hw: &HwConfig, max: usize) -> Result<Vec<(u32, u32,
 
 /// Random vectors of each bench.
 const RANDOM: usize = 2000;
+/// Edge-stepper rows: whole edges are added until this many rows are reached.
+const EDGE_ROWS: usize = 40_000;
 /// Scene taps of each bench.
 const TAPS: usize = 2000;
 
@@ -444,6 +448,78 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
             let t = Instant::now();
             for v in &b.vectors {
                 black_box(one(black_box(v[0] as i64), v[1] as i64));
+            }
+            b.model_ns = t.elapsed().as_nanos() as u64;
+        }
+        "setup" => {
+            // Real scene edges: every triangle edge of the quantised scene, loaded and
+            // walked over all its sample rows.
+            let f = pipeline::front(scene, hw)?;
+            let g = &f.grid;
+            let mut edges = vec![];
+            for p in &f.qprims {
+                if let QPrim::Triangle(v) = p {
+                    let mut s = *v;
+                    s.sort_by_key(|p| (p.y, p.x));
+                    for (t, u) in [(0, 1), (1, 2), (0, 2)] {
+                        if s[u].y > s[t].y {
+                            edges.push(Edge::new((s[t].x, s[t].y), (s[u].x, s[u].y), g));
+                        }
+                    }
+                }
+            }
+            // Rows of each edge: (load, q, r, a, b, d) in, (q, r, carry) out.
+            let mut rows: Vec<[i64; 9]> = vec![];
+            let mut walked = 0usize;
+            let mut used = 0usize;
+            for e0 in &edges {
+                if rows.len() >= EDGE_ROWS {
+                    break;
+                }
+                used += 1;
+                let mut e = *e0;
+                rows.push([1, e.q, e.r, e.a, e.b, e.d, e.q, e.r, 0]);
+                for _ in e.k0 + 1..e.k1 {
+                    let c = e.step();
+                    rows.push([0, 0, 0, 0, 0, 0, e.q, e.r, c as i64]);
+                    walked += 1;
+                }
+            }
+            edges.truncate(used);
+            let bits = |v: i64| 64 - v.unsigned_abs().leading_zeros();
+            let qb = rows
+                .iter()
+                .map(|r| bits(r[1]).max(bits(r[3])).max(bits(r[6])))
+                .max()
+                .unwrap_or(1)
+                + 1;
+            let db = rows
+                .iter()
+                .map(|r| bits(r[5]).max(bits(r[7])))
+                .max()
+                .unwrap_or(1)
+                .max(1);
+            let qm = (1u64 << qb) - 1;
+            b.params = vec![("Q_BITS".into(), qb as i64), ("D_BITS".into(), db as i64)];
+            b.fields = vec!["load", "q_in", "r_in", "a", "b", "d", "q", "r", "carry"];
+            b.vectors = rows
+                .iter()
+                .map(|r| {
+                    let mut v: Vec<u64> = r.iter().map(|&x| x as u64).collect();
+                    for k in [1, 3, 6] {
+                        v[k] &= qm;
+                    }
+                    v
+                })
+                .collect();
+            b.sources.push(("scene edges (loads)", used));
+            b.sources.push(("scene edges (steps)", walked));
+            let t = Instant::now();
+            for e0 in &edges {
+                let mut e = black_box(*e0);
+                for _ in e.k0 + 1..e.k1 {
+                    black_box(e.step());
+                }
             }
             b.model_ns = t.elapsed().as_nanos() as u64;
         }
