@@ -193,6 +193,13 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
     };
     match stage {
         "gamma" => {
+            if hw.coding.kind == CodingKind::LogAdd {
+                return Err(bad(
+                    hw,
+                    "coding.kind",
+                    "the gamma model holds the linear frame's LUT; log-add uses the eq. 15 LUT (not modelled in HDL)".into(),
+                ));
+            }
             let lut = GammaLut::build(&spec, int_bits);
             b.params = vec![
                 ("ACC_BITS".into(), acc_bits as i64),
