@@ -23,6 +23,7 @@ pub mod error;
 pub mod files;
 pub mod fixed;
 pub mod flicker;
+pub mod hdl;
 pub mod hw;
 pub mod output;
 pub mod perceptual;

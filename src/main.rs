@@ -34,6 +34,41 @@ enum Cmd {
     Cycles(CyclesArgs),
     /// Small-object flicker: a light point and a thin line swept over 32x32 sub-pixel phases.
     Flicker(FlickerArgs),
+    /// HDL co-simulation of the Verilog models in hdl-models/ (see hdl-models/README.md).
+    #[command(subcommand)]
+    Hdl(HdlCmd),
+    /// Hardware cost per stage: the analytic model, and with --synth yosys cell counts of the HDL models.
+    Cost(CostArgs),
+}
+
+#[derive(Args)]
+struct CostArgs {
+    #[command(flatten)]
+    s: SceneArgs,
+    /// Synthesise each HDL model with yosys at the configured widths (cached in target/hdl-synth).
+    #[arg(long)]
+    synth: bool,
+}
+
+#[derive(Subcommand)]
+enum HdlCmd {
+    /// Write a stage's vectors (scene taps, exhaustive, random), ROM files and params.vh to a directory.
+    Vectors(HdlVectorsArgs),
+}
+
+#[derive(Args)]
+struct HdlVectorsArgs {
+    /// Stage: gamma, accumulate, dither, logdomain (log-add hardware), setup (edge stepper).
+    #[arg(long)]
+    stage: String,
+    #[command(flatten)]
+    s: SceneArgs,
+    /// Output directory.
+    #[arg(long)]
+    out: String,
+    /// Also run the testbench under Icarus Verilog (exit 1 when it fails).
+    #[arg(long)]
+    run: bool,
 }
 
 #[derive(Args)]
@@ -272,6 +307,8 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Flicker(a) => flicker(a),
+        Cmd::Hdl(HdlCmd::Vectors(a)) => hdl_vectors(a),
+        Cmd::Cost(a) => cost(a),
         Cmd::Dof(a) => {
             let d = calc::depth_of_field(a.f_number, a.coc, a.focal, a.distance)
                 .map_err(|m| arg_error("dof", m))?;
@@ -814,6 +851,99 @@ fn flicker(a: FlickerArgs) -> Result<ExitCode, Error> {
         println!(
             "analytic split error without correction: 2 (1/2)^{} - 1 = {:+.2}%",
             r.gamma, r.analytic_split_error_pct
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn hdl_vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
+    use igemu::hdl;
+    let scene = load_scene(a.s.scene.as_deref())?;
+    let hw = HwConfig::resolve(a.s.hw.as_deref())?;
+    let b = hdl::vectors(&a.stage, &scene, &hw)?;
+    let dir = std::path::Path::new(&a.out);
+    b.write(dir)?;
+    let src: Vec<String> = b.sources.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    println!(
+        "hdl vectors | stage {} (module {}) | hardware `{}` | {} vectors ({}) | {}",
+        b.stage,
+        b.module,
+        hw.name,
+        b.vectors.len(),
+        src.join(", "),
+        dir.display()
+    );
+    let params: Vec<String> = b.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    println!("parameters: {}", params.join(" "));
+    if !a.run {
+        return Ok(ExitCode::SUCCESS);
+    }
+    let r = hdl::run_icarus_timed(b.module, dir).map_err(|m| arg_error("--run", m))?;
+    match r.verdict {
+        hdl::Verdict::Ok(n) => {
+            let rust = n as f64 / (b.model_ns.max(1) as f64 * 1e-9);
+            let sim = n as f64 / r.sim_s;
+            println!(
+                "icarus: TESTBENCH OK {n} vectors | compile {:.2} s, simulate {:.3} s = {sim:.0} vectors/s | Rust model {:.3} ms = {rust:.0} vectors/s | Rust / Verilog = {:.0}x",
+                r.compile_s,
+                r.sim_s,
+                b.model_ns as f64 * 1e-6,
+                rust / sim
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        hdl::Verdict::Failed(m) => {
+            println!("icarus: TESTBENCH FAILED: {m}");
+            Ok(ExitCode::from(1))
+        }
+    }
+}
+
+fn cost(a: CostArgs) -> Result<ExitCode, Error> {
+    use igemu::hdl;
+    let scene = load_scene(a.s.scene.as_deref())?;
+    let hw = HwConfig::resolve(a.s.hw.as_deref())?;
+    let r = pipeline::render(&scene, &hw, RenderOptions { stage_local: false })?;
+    println!(
+        "cost | hardware `{}` | scene `{}`{}",
+        hw.name,
+        scene.name,
+        if a.synth {
+            " | yosys synth (generic gates)"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "{:<11} {:>12} {:>10} {:>7} {:>6}  HDL model: yosys cells (flip-flops)",
+        "stage", "storage_bits", "lut_bits", "adders", "mults"
+    );
+    let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("hdl-synth");
+    for st in &r.report.stages {
+        let c = &st.cost;
+        let adders: u32 = c.adders.iter().map(|u| u.count).sum();
+        let mults: u32 = c.multipliers.iter().map(|u| u.count).sum();
+        let synth = match hdl::module_of(&st.name) {
+            Some(m) if a.synth => match hdl::vectors(&st.name, &scene, &hw) {
+                Ok(b) => match hdl::synth::synth(&b, &cache) {
+                    Ok(s) => format!(
+                        "{m}: {} cells ({} FF){}",
+                        s.cells,
+                        s.flip_flops(),
+                        if s.cached { ", cached" } else { "" }
+                    ),
+                    Err(e) => format!("{m}: synthesis failed: {e}"),
+                },
+                Err(e) => format!("{m}: {e}"),
+            },
+            Some(m) => format!("{m} (use --synth)"),
+            None => "-".into(),
+        };
+        println!(
+            "{:<11} {:>12} {:>10} {:>7} {:>6}  {synth}",
+            st.name, c.storage_bits, c.lut_bits, adders, mults
         );
     }
     Ok(ExitCode::SUCCESS)

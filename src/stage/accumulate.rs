@@ -215,6 +215,21 @@ impl AccParams {
         Ok(q.code)
     }
 
+    /// One `w * I` term rounded to the frame format and added to `acc` with the overflow
+    /// mode, as the HDL model `hdl-models/rtl/acc_mac.v` computes it: `(code, overflowed)`
+    /// (the `ERROR` mode gives the saturated code and the flag instead of an error).
+    pub fn mac_code(&self, acc: i64, w: u32, i: u32) -> (i64, bool) {
+        let mut st = SignalStats::new("mac", self.frame.format);
+        let part = self.product(w as i64 * i as i64, &mut st);
+        let q = self.frame.handle_overflow(acc as i128 + part as i128);
+        (q.code, q.overflow)
+    }
+
+    /// Bits dropped when rounding a product to the frame format (negative: shift left).
+    pub fn product_shift(&self) -> i32 {
+        self.shift()
+    }
+
     /// The frame code of a pixel that sees only the background.
     pub fn background_code(&self, bg_i: u32) -> Result<u32> {
         let mut st = SignalStats::new("bg", self.frame.format);
