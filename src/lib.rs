@@ -29,3 +29,4 @@ pub mod perceptual;
 pub mod pipeline;
 pub mod scene;
 pub mod stage;
+pub mod sweep;

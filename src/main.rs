@@ -34,6 +34,32 @@ enum Cmd {
     Cycles(CyclesArgs),
     /// Small-object flicker: a light point and a thin line swept over 32x32 sub-pixel phases.
     Flicker(FlickerArgs),
+    /// Word-width sweep: render every configuration of a grid, one JSON line each, and print the Pareto front.
+    Sweep(SweepArgs),
+}
+
+#[derive(Args)]
+struct SweepArgs {
+    /// Scene TOML files or embedded scene names (default: the embedded default scene).
+    scenes: Vec<String>,
+    /// Grid TOML: dotted hardware fields with lists of values (`gamma.dac_bits = [8, 9]`, `preset = [...]`).
+    #[arg(long)]
+    grid: String,
+    /// Output JSON-lines file (one row per configuration and scene).
+    #[arg(long)]
+    out: String,
+    /// Keep the complete rows already in OUT and run only the missing configurations.
+    #[arg(long)]
+    resume: bool,
+    /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Configurations rendered in parallel (1 = serial; results are identical).
+    #[arg(long, default_value_t = 1)]
+    jobs: usize,
+    /// Axes of the Pareto front, comma separated: error, max_error, weber, contours, cost, throughput.
+    #[arg(long, default_value = "error,cost")]
+    axes: String,
 }
 
 #[derive(Args)]
@@ -272,6 +298,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Flicker(a) => flicker(a),
+        Cmd::Sweep(a) => sweep(a),
         Cmd::Dof(a) => {
             let d = calc::depth_of_field(a.f_number, a.coc, a.focal, a.distance)
                 .map_err(|m| arg_error("dof", m))?;
@@ -815,6 +842,88 @@ fn flicker(a: FlickerArgs) -> Result<ExitCode, Error> {
             "analytic split error without correction: 2 (1/2)^{} - 1 = {:+.2}%",
             r.gamma, r.analytic_split_error_pct
         );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
+    use igemu::sweep::{self, grid, pareto};
+    // Everything is checked before the first render.
+    let shard = match &a.shard {
+        Some(s) => Some(grid::Shard::parse(s).map_err(|m| arg_error("--shard", m))?),
+        None => None,
+    };
+    if a.jobs == 0 || a.jobs > 1024 {
+        return Err(arg_error(
+            "--jobs",
+            format!("must be in 1..=1024, got {}", a.jobs),
+        ));
+    }
+    let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
+    let file = igemu::files::TomlFile::read(&a.grid)?;
+    let configs = grid::Grid::parse(&file)?.expand(&file)?;
+    let scenes: Vec<Scene> = if a.scenes.is_empty() {
+        vec![Scene::default_scene()]
+    } else {
+        a.scenes
+            .iter()
+            .map(|s| load_scene(Some(s)))
+            .collect::<Result<_, _>>()?
+    };
+    for c in &configs {
+        for s in &scenes {
+            pipeline::guard_band(s, &c.hw).map_err(|e| {
+                arg_error(
+                    &a.grid,
+                    format!(
+                        "configuration {} ({}) on scene `{}`: {e}",
+                        c.index, c.canonical, s.name
+                    ),
+                )
+            })?;
+        }
+    }
+    let opts = sweep::SweepOptions {
+        out: &a.out,
+        resume: a.resume,
+        shard,
+        jobs: a.jobs,
+    };
+    let summary = sweep::run(&configs, &scenes, &opts, &|_, _| {})?;
+    eprintln!(
+        "igemu sweep: {} configurations x {} scenes; this run: {} rows ({} kept from {}, {} computed) -> {}",
+        configs.len(),
+        scenes.len(),
+        summary.planned,
+        summary.reused,
+        a.out,
+        summary.computed,
+        a.out
+    );
+    let rows = &summary.rows;
+    let front = pareto::front(rows, &axes);
+    println!(
+        "Pareto front on {} ({} of {} rows):",
+        axes.iter()
+            .map(|x| x.name())
+            .collect::<Vec<_>>()
+            .join(" x "),
+        front.len(),
+        rows.len()
+    );
+    print!("  {:>5}  {:<16}", "index", "scene");
+    for x in &axes {
+        print!("  {:>18}", x.name());
+    }
+    println!("  configuration");
+    for &i in &front {
+        let r = &rows[i];
+        print!("  {:>5}  {:<16}", r.index, r.scene);
+        for x in &axes {
+            print!("  {:>18.4}", x.value(r));
+        }
+        let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        println!("  {}", cfg.join(" "));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,0 +1,133 @@
+//! Pareto fronts of sweep rows: the rows no other row beats on every chosen axis.
+
+use super::Row;
+
+/// An axis of the front.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axis {
+    /// Mean |code difference| (minimised).
+    Error,
+    /// Largest |code difference| (minimised).
+    MaxError,
+    /// Largest Weber error (minimised).
+    Weber,
+    /// Visible contour steps (minimised).
+    Contours,
+    /// Storage + LUT bits (minimised).
+    Cost,
+    /// Frames per second (maximised).
+    Throughput,
+}
+
+/// Axis names accepted by `--axes`.
+pub const AXES: &[&str] = &[
+    "error",
+    "max_error",
+    "weber",
+    "contours",
+    "cost",
+    "throughput",
+];
+
+impl Axis {
+    /// Parses an axis name.
+    pub fn parse(s: &str) -> Result<Axis, String> {
+        Ok(match s.trim() {
+            "error" => Axis::Error,
+            "max_error" => Axis::MaxError,
+            "weber" => Axis::Weber,
+            "contours" => Axis::Contours,
+            "cost" => Axis::Cost,
+            "throughput" | "fps" => Axis::Throughput,
+            other => {
+                return Err(format!(
+                    "unknown axis `{other}`; allowed: {}",
+                    AXES.join(", ")
+                ));
+            }
+        })
+    }
+
+    /// Parses a comma-separated list of at least two distinct axes.
+    pub fn parse_list(s: &str) -> Result<Vec<Axis>, String> {
+        let v: Vec<Axis> = s.split(',').map(Axis::parse).collect::<Result<_, _>>()?;
+        if v.len() < 2 {
+            return Err(format!(
+                "give at least two axes (e.g. error,cost), got `{s}`"
+            ));
+        }
+        for (i, a) in v.iter().enumerate() {
+            if v[..i].contains(a) {
+                return Err(format!("axis {a:?} given twice in `{s}`"));
+            }
+        }
+        Ok(v)
+    }
+
+    /// Display name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Axis::Error => "mean code diff",
+            Axis::MaxError => "max code diff",
+            Axis::Weber => "max Weber error",
+            Axis::Contours => "contour steps",
+            Axis::Cost => "storage + LUT bits",
+            Axis::Throughput => "frames/s",
+        }
+    }
+
+    /// The row's value on this axis, oriented so that smaller is better.
+    pub fn key(self, r: &Row) -> f64 {
+        match self {
+            Axis::Error => r.error.mean_code_diff,
+            Axis::MaxError => r.error.max_code_diff as f64,
+            Axis::Weber => r.error.weber_max,
+            Axis::Contours => r.error.contour_steps as f64,
+            Axis::Cost => (r.cost.storage_bits + r.cost.lut_bits) as f64,
+            Axis::Throughput => -r.cycles.fps,
+        }
+    }
+
+    /// The row's value as shown (throughput positive).
+    pub fn value(self, r: &Row) -> f64 {
+        match self {
+            Axis::Throughput => r.cycles.fps,
+            _ => self.key(r),
+        }
+    }
+}
+
+/// Whether `a` dominates `b`: no worse on every axis and better on one.
+pub fn dominates(a: &Row, b: &Row, axes: &[Axis]) -> bool {
+    let mut better = false;
+    for &ax in axes {
+        let (x, y) = (ax.key(a), ax.key(b));
+        if x > y {
+            return false;
+        }
+        if x < y {
+            better = true;
+        }
+    }
+    better
+}
+
+/// Indices of the non-dominated rows, ordered by the first axis then the row index.
+/// Rows of different scenes are never compared with each other.
+pub fn front(rows: &[Row], axes: &[Axis]) -> Vec<usize> {
+    let mut out: Vec<usize> = (0..rows.len())
+        .filter(|&i| {
+            !rows
+                .iter()
+                .any(|o| o.scene == rows[i].scene && dominates(o, &rows[i], axes))
+        })
+        .collect();
+    out.sort_by(|&a, &b| {
+        rows[a]
+            .scene
+            .cmp(&rows[b].scene)
+            .then(axes[0].key(&rows[a]).total_cmp(&axes[0].key(&rows[b])))
+            .then(rows[a].index.cmp(&rows[b].index))
+    });
+    out
+}
