@@ -57,9 +57,12 @@ struct SweepArgs {
     /// Configurations rendered in parallel (1 = serial; results are identical).
     #[arg(long, default_value_t = 1)]
     jobs: usize,
-    /// Axes of the Pareto front, comma separated: error, max_error, weber, contours, cost, throughput.
+    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput.
     #[arg(long, default_value = "error,cost")]
     axes: String,
+    /// Run every phase for every configuration (no stage reuse between configurations).
+    #[arg(long)]
+    no_reuse: bool,
 }
 
 #[derive(Args)]
@@ -883,11 +886,13 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
             })?;
         }
     }
+    let cache = sweep::cache::PhaseCache::new();
     let opts = sweep::SweepOptions {
         out: &a.out,
         resume: a.resume,
         shard,
         jobs: a.jobs,
+        cache: if a.no_reuse { None } else { Some(&cache) },
     };
     let summary = sweep::run(&configs, &scenes, &opts, &|_, _| {})?;
     eprintln!(

@@ -264,6 +264,7 @@ fn compare_frags(fx: &[Frag], fl: &[FragF], i_err: &mut LocalError, z_err: &mut 
     }
 }
 
+#[derive(Clone)]
 /// Phase 1: host front end, input quantisation and the plan's region.
 pub struct Front {
     /// Host scene (f64 screen-space primitives).
@@ -347,6 +348,7 @@ pub fn front(scene: &Scene, hw: &HwConfig) -> Result<Front> {
     })
 }
 
+#[derive(Clone)]
 /// Phase 2 output: the resolved sample buffers, fixed and float.
 pub struct Geometry {
     /// Fixed sample buffer.
@@ -594,6 +596,7 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
     })
 }
 
+#[derive(Clone)]
 /// Phase 3 output: the frame memory, fixed and float.
 pub struct Accumulated {
     /// Fixed frame memory, depth and coverage.
@@ -788,6 +791,19 @@ pub fn render_ext(
     opts: RenderOptions,
     dof_reference: bool,
 ) -> Result<Render> {
+    render_cached(scene, hw, opts, dof_reference, None)
+}
+
+/// [`render_ext`] reusing the phases up to the frame memory (front, geometry, accumulate,
+/// depth of field) from `cache` when only late-only fields (gamma, dither) changed; used by
+/// sweeps (see [`crate::sweep::cache`]). The result is identical to an uncached render.
+pub fn render_cached(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RenderOptions,
+    dof_reference: bool,
+    cache: Option<&crate::sweep::cache::PhaseCache>,
+) -> Result<Render> {
     let log_add = hw.coding.kind == CodingKind::LogAdd;
     if log_add && !matches!(scene.camera.lens, crate::scene::Lens::Pinhole) {
         return Err(FileError {
@@ -802,8 +818,33 @@ pub fn render_ext(
         }
         .into());
     }
-    let mut f = front(scene, hw)?;
-    let mut g = geometry(&f, hw, opts)?;
+    let cached = match cache {
+        Some(c) if hw.coding.kind == CodingKind::Linear => {
+            Some(c.early(scene, hw, opts, dof_reference, || {
+                let f = front(scene, hw)?;
+                let g = geometry(&f, hw, opts)?;
+                let mut a = accumulate_phase(&f, &g, hw, opts)?;
+                let r_dof = crate::stage::dof::run_stage(
+                    scene,
+                    hw,
+                    &mut a.frame,
+                    &mut a.frame_ref,
+                    opts.stage_local,
+                    dof_reference,
+                )?;
+                Ok((f, g, a, r_dof))
+            })?)
+        }
+        _ => None,
+    };
+    let (mut f, mut g, mut early_a) = match cached {
+        Some((f, g, a, r_dof)) => (f, g, Some((a, r_dof))),
+        None => {
+            let f = front(scene, hw)?;
+            let g = geometry(&f, hw, opts)?;
+            (f, g, None)
+        }
+    };
     // Log coding: the `logdomain` stage (encoder; potentiation LUT or log accumulation).
     let log_stage = if hw.coding.kind != CodingKind::Linear {
         Some(logdomain::encode_phase(&mut f, &mut g, scene, hw)?)
@@ -815,6 +856,11 @@ pub fn render_ext(
             let (a, add) = logdomain::accumulate_phase(&f, &g, scene, hw, &mut r, opts)?;
             let p = logdomain::post(&a, &add, scene, hw, opts);
             (a, p, vec![r], None)
+        }
+        (_, r) if early_a.is_some() => {
+            let (a, r_dof) = early_a.take().expect("checked");
+            let p = post(&a, scene, hw, opts)?;
+            (a, p, r.into_iter().collect(), r_dof)
         }
         (_, r) => {
             let mut a = accumulate_phase(&f, &g, hw, opts)?;

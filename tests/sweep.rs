@@ -239,3 +239,35 @@ fn pareto_front_keeps_exactly_the_non_dominated_rows() {
     assert!(pareto::Axis::parse_list("error").is_err());
     assert!(pareto::Axis::parse_list("error,bogus").is_err());
 }
+
+#[test]
+fn stage_reuse_gives_the_rows_of_full_renders() {
+    let d = tmp("reuse");
+    let scene_path = scene_file(&d);
+    let scene = igemu::scene::Scene::load(&scene_path).unwrap();
+    let text = "gamma.dac_bits = [6, 8, 10]\ndither.kind = [\"none\", \"bayer4\"]\n\
+                accumulate.frame = [\"UQ10.0\", \"UQ12.0\"]\n";
+    let f = TomlFile::from_text("g.toml", text);
+    let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
+    let cache = sweep::cache::PhaseCache::new();
+    let mut outs = Vec::new();
+    for (name, c) in [("cached", Some(&cache)), ("full", None)] {
+        let out = d
+            .join(format!("{name}.jsonl"))
+            .to_string_lossy()
+            .into_owned();
+        let opts = sweep::SweepOptions {
+            out: &out,
+            resume: false,
+            shard: None,
+            jobs: 1,
+            cache: c,
+        };
+        sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).unwrap();
+        outs.push(rows(&out));
+    }
+    assert_eq!(outs[0].len(), 12);
+    assert_eq!(outs[0], outs[1]);
+    // accumulate.frame varies slowest: 2 misses, 10 hits.
+    assert_eq!(cache.stats(), (10, 2));
+}

@@ -11,6 +11,7 @@
 //! * `--shard K/N` runs a contiguous block of jobs: shard files concatenated in K order equal
 //!   the unsharded output.
 
+pub mod cache;
 pub mod grid;
 pub mod pareto;
 
@@ -132,9 +133,20 @@ pub fn jobs(configs: usize, scenes: usize) -> Vec<Job> {
 }
 
 /// Renders one configuration on one scene and builds its row.
-pub fn run_job(job: Job, cfg: &Config, scene: &Scene) -> Result<Row> {
+pub fn run_job(
+    job: Job,
+    cfg: &Config,
+    scene: &Scene,
+    cache: Option<&cache::PhaseCache>,
+) -> Result<Row> {
     let t = std::time::Instant::now();
-    let r = pipeline::render(scene, &cfg.hw, RenderOptions { stage_local: false })?;
+    let r = pipeline::render_cached(
+        scene,
+        &cfg.hw,
+        RenderOptions { stage_local: false },
+        false,
+        cache,
+    )?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     let rep = &r.report;
     let c = &rep.end_to_end.codes;
@@ -248,6 +260,8 @@ pub struct SweepOptions<'a> {
     pub shard: Option<Shard>,
     /// Worker threads over configurations (1 = serial).
     pub jobs: usize,
+    /// Stage reuse between configurations (`None`: every render runs every phase).
+    pub cache: Option<&'a cache::PhaseCache>,
 }
 
 /// Summary of a run.
@@ -305,7 +319,7 @@ pub fn run(
     let total = mine.len();
     progress(reused, total);
     let work = |j: &Job| -> Result<Row> {
-        let row = run_job(*j, &configs[j.config], &scenes[j.scene])?;
+        let row = run_job(*j, &configs[j.config], &scenes[j.scene], opts.cache)?;
         let mut line = serde_json::to_string(&row).expect("rows serialise");
         line.push('\n');
         {

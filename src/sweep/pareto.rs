@@ -5,8 +5,11 @@ use super::Row;
 /// An axis of the front.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Axis {
-    /// Mean |code difference| (minimised).
+    /// Mean Weber error through the display model (minimised): comparable across DAC widths,
+    /// unlike code differences.
     Error,
+    /// Mean |code difference| in DAC codes (minimised).
+    CodeError,
     /// Largest |code difference| (minimised).
     MaxError,
     /// Largest Weber error (minimised).
@@ -34,6 +37,7 @@ impl Axis {
     pub fn parse(s: &str) -> Result<Axis, String> {
         Ok(match s.trim() {
             "error" => Axis::Error,
+            "code_error" => Axis::CodeError,
             "max_error" => Axis::MaxError,
             "weber" => Axis::Weber,
             "contours" => Axis::Contours,
@@ -67,7 +71,8 @@ impl Axis {
     /// Display name.
     pub fn name(self) -> &'static str {
         match self {
-            Axis::Error => "mean code diff",
+            Axis::Error => "mean Weber error",
+            Axis::CodeError => "mean code diff",
             Axis::MaxError => "max code diff",
             Axis::Weber => "max Weber error",
             Axis::Contours => "contour steps",
@@ -79,7 +84,8 @@ impl Axis {
     /// The row's value on this axis, oriented so that smaller is better.
     pub fn key(self, r: &Row) -> f64 {
         match self {
-            Axis::Error => r.error.mean_code_diff,
+            Axis::Error => r.error.weber_mean,
+            Axis::CodeError => r.error.mean_code_diff,
             Axis::MaxError => r.error.max_code_diff as f64,
             Axis::Weber => r.error.weber_max,
             Axis::Contours => r.error.contour_steps as f64,
