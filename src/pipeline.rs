@@ -832,17 +832,18 @@ pub fn render_cached(
                     opts.stage_local,
                     dof_reference,
                 )?;
-                Ok((f, g, a, r_dof))
+                let sp = pack_sample_buffer(f.qprims.len(), &g.samples, hw);
+                Ok((f, g, a, r_dof, sp))
             })?)
         }
         _ => None,
     };
-    let (mut f, mut g, mut early_a) = match cached {
-        Some((f, g, a, r_dof)) => (f, g, Some((a, r_dof))),
+    let (mut f, mut g, mut early_a, mut early_sample_pack) = match cached {
+        Some((f, g, a, r_dof, sp)) => (f, g, Some((a, r_dof)), Some(sp)),
         None => {
             let f = front(scene, hw)?;
             let g = geometry(&f, hw, opts)?;
-            (f, g, None)
+            (f, g, None, None)
         }
     };
     // Log coding: the `logdomain` stage (encoder; potentiation LUT or log accumulation).
@@ -919,7 +920,14 @@ pub fn render_cached(
         &a.tile_rmw,
         hw.accumulate.frame.format.total_bits(),
     );
-    let packed = pack_checks(f.qprims.len(), &g.samples, &a.frame, scene, hw);
+    let packed = pack_checks(
+        f.qprims.len(),
+        &g.samples,
+        &a.frame,
+        scene,
+        hw,
+        early_sample_pack.take(),
+    );
     let planned: Vec<String> = stages.iter().map(|s| s.name.clone()).collect();
     let cycles = crate::cycles::report(
         &workload,
@@ -981,6 +989,7 @@ fn pack_checks(
     frame: &Frame,
     scene: &Scene,
     hw: &HwConfig,
+    sample_pack: Option<crate::cycles::cost::PackCheck>,
 ) -> Vec<crate::cycles::cost::PackCheck> {
     use crate::cycles::cost::pack;
     let fb = hw.accumulate.frame.format.total_bits();
@@ -1005,6 +1014,17 @@ fn pack_checks(
         lut.cost().lut_bits,
         |r, _| lut.table[r] as u64,
     ));
+    out.push(sample_pack.unwrap_or_else(|| pack_sample_buffer(prims, s, hw)));
+    out
+}
+
+/// The sample-buffer pack check (depends only on the early phases: cached by sweeps).
+pub fn pack_sample_buffer(
+    prims: usize,
+    s: &Samples,
+    hw: &HwConfig,
+) -> crate::cycles::cost::PackCheck {
+    use crate::cycles::cost::pack;
     let zb = hw.visibility.z.format.total_bits();
     let ib = hw.input.intensity.format.total_bits();
     let id_bits = (prims as u64 + 1)
@@ -1012,7 +1032,7 @@ fn pack_checks(
         .trailing_zeros()
         .max(1);
     let zmax = hw.visibility.z.format.max_code() as u64;
-    out.push(pack(
+    pack(
         "sample buffer (modelled region)",
         s.z.len(),
         &[zb, ib, id_bits],
@@ -1022,8 +1042,7 @@ fn pack_checks(
             1 => s.i[r] as u64,
             _ => s.prim[r] as u64,
         },
-    ));
-    out
+    )
 }
 
 /// The background's intensity code (quantised like a vertex intensity).

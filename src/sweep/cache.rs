@@ -19,8 +19,15 @@ use std::sync::{Arc, Mutex};
 /// Entries kept.
 pub const CAPACITY: usize = 4;
 
-/// What the early phases produce.
-pub type Early = (Front, Geometry, Accumulated, Option<StageReport>);
+/// What the early phases produce: front, geometry, frame memory (after depth of field),
+/// the depth-of-field report, and the sample-buffer pack check of the cost model.
+pub type Early = (
+    Front,
+    Geometry,
+    Accumulated,
+    Option<StageReport>,
+    crate::cycles::cost::PackCheck,
+);
 
 /// The cache (shared between threads).
 #[derive(Default)]
