@@ -894,7 +894,37 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
         jobs: a.jobs,
         cache: if a.no_reuse { None } else { Some(&cache) },
     };
-    let summary = sweep::run(&configs, &scenes, &opts, &|_, _| {})?;
+    // Progress with ETA on a terminal only (quiet when stderr is piped or redirected).
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let start = std::time::Instant::now();
+    let first = std::sync::Mutex::new(None::<usize>);
+    let progress = |done: usize, total: usize| {
+        if !tty {
+            return;
+        }
+        let mut f = first.lock().unwrap_or_else(|e| e.into_inner());
+        let base = *f.get_or_insert(done);
+        let secs = start.elapsed().as_secs_f64();
+        let eta = if done > base {
+            format!(
+                "{:.0} s",
+                secs / (done - base) as f64 * (total - done) as f64
+            )
+        } else {
+            "?".into()
+        };
+        let width = 30;
+        let fill = (done * width).checked_div(total).unwrap_or(width);
+        eprint!(
+            "\r[{}{}] {done}/{total}  {secs:.0} s elapsed, ETA {eta}   ",
+            "#".repeat(fill),
+            "-".repeat(width - fill)
+        );
+        if done == total {
+            eprintln!();
+        }
+    };
+    let summary = sweep::run(&configs, &scenes, &opts, &progress)?;
     eprintln!(
         "igemu sweep: {} configurations x {} scenes; this run: {} rows ({} kept from {}, {} computed) -> {}",
         configs.len(),
