@@ -36,6 +36,20 @@ enum Cmd {
     Flicker(FlickerArgs),
     /// Word-width sweep: render every configuration of a grid, one JSON line each, and print the Pareto front.
     Sweep(SweepArgs),
+    /// Observed min/max per signal and the narrowest format holding it; export the formats as typedefs.
+    Ranges(RangesArgs),
+}
+
+#[derive(Args)]
+struct RangesArgs {
+    #[command(flatten)]
+    s: SceneArgs,
+    /// Print the configuration's formats as ac_fixed, ap_fixed, systemc or verilog instead.
+    #[arg(long, value_parser = ["ac_fixed", "ap_fixed", "systemc", "verilog"])]
+    export: Option<String>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args)]
@@ -302,6 +316,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
         }
         Cmd::Flicker(a) => flicker(a),
         Cmd::Sweep(a) => sweep(a),
+        Cmd::Ranges(a) => ranges(a),
         Cmd::Dof(a) => {
             let d = calc::depth_of_field(a.f_number, a.coc, a.focal, a.distance)
                 .map_err(|m| arg_error("dof", m))?;
@@ -959,6 +974,48 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
         }
         let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
         println!("  {}", cfg.join(" "));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn ranges(a: RangesArgs) -> Result<ExitCode, Error> {
+    use igemu::sweep::ranges::{self, Export};
+    if let Some(e) = &a.export {
+        let hw = HwConfig::resolve(a.s.hw.as_deref())?;
+        let lang = match e.as_str() {
+            "ac_fixed" => Export::AcFixed,
+            "ap_fixed" => Export::ApFixed,
+            "systemc" => Export::SystemC,
+            _ => Export::Verilog,
+        };
+        print!("{}", ranges::export(&hw, lang));
+        return Ok(ExitCode::SUCCESS);
+    }
+    let r = run(&a.s, RenderOptions { stage_local: false })?;
+    let rows = ranges::ranges(&r.report.stages);
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).expect("serialisable")
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+        "stage", "signal", "format", "min (LSB)", "max (LSB)", "narrowest", "overflows"
+    );
+    for s in rows {
+        let opt = |v: Option<i128>| v.map_or("-".to_string(), |v| v.to_string());
+        println!(
+            "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+            s.stage,
+            s.signal,
+            s.format,
+            opt(s.min),
+            opt(s.max),
+            s.narrowest.unwrap_or_else(|| "-".into()),
+            s.overflows
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

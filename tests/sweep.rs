@@ -271,3 +271,71 @@ fn stage_reuse_gives_the_rows_of_full_renders() {
     // accumulate.frame varies slowest: 2 misses, 10 hits.
     assert_eq!(cache.stats(), (10, 2));
 }
+
+#[test]
+fn narrowest_formats_hold_the_observed_range_and_no_narrower_does() {
+    use igemu::sweep::ranges::narrowest;
+    for (min, max, frac) in [
+        (0i128, 0i128, 0u32),
+        (0, 255, 0),
+        (0, 256, 0),
+        (3, 57438, 4),
+        (-1, 0, 2),
+        (-128, 127, 0),
+        (-129, 5, 3),
+        (-5, 1000, 4),
+    ] {
+        let f = narrowest(min, max, frac);
+        assert_eq!(f.frac_bits, frac);
+        let holds =
+            |f: &igemu::fixed::QFormat| f.min_code() as i128 <= min && max <= f.max_code() as i128;
+        assert!(holds(&f), "{f} holds [{min}, {max}]");
+        if f.int_bits > 0 {
+            let smaller = igemu::fixed::QFormat::new(f.signed, f.int_bits - 1, frac);
+            if smaller.total_bits() > 0 {
+                assert!(!holds(&smaller), "{smaller} would do for [{min}, {max}]");
+            }
+        }
+    }
+}
+
+#[test]
+fn ranges_cli_reports_signals_and_exports_typedefs() {
+    let d = tmp("ranges");
+    let scene = scene_file(&d);
+    let o = igemu(&["ranges", &scene, "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let frame = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["signal"] == "accumulate.frame")
+        .expect("accumulate.frame is instrumented");
+    assert!(frame["max"].as_i64().unwrap() <= 4095);
+    assert!(frame["narrowest"].as_str().unwrap().starts_with("UQ"));
+    for (lang, expect) in [
+        (
+            "ac_fixed",
+            "typedef ac_fixed<12, 12, false, AC_RND_CONV, AC_SAT> accumulate_frame_t;",
+        ),
+        (
+            "ap_fixed",
+            "typedef ap_fixed<17, 13, AP_RND_CONV, AP_SAT> input_coord_t;",
+        ),
+        (
+            "systemc",
+            "sc_dt::sc_ufixed<8, 8, sc_dt::SC_RND_CONV, sc_dt::SC_SAT> gamma_dac_t;",
+        ),
+        ("verilog", "localparam integer ACCUMULATE_FRAME_W = 12;"),
+    ] {
+        let o = igemu(&["ranges", "--export", lang]);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success());
+        assert!(out.contains(expect), "{lang}: {out}");
+    }
+    assert_eq!(
+        igemu(&["ranges", "--export", "vhdl"]).status.code(),
+        Some(2)
+    );
+}

@@ -14,6 +14,7 @@
 pub mod cache;
 pub mod grid;
 pub mod pareto;
+pub mod ranges;
 
 use crate::error::{Error, Result};
 use crate::pipeline::{self, RenderOptions};
