@@ -77,6 +77,9 @@ struct SweepArgs {
     /// Run every phase for every configuration (no stage reuse between configurations).
     #[arg(long)]
     no_reuse: bool,
+    /// Write an SVG of error vs cost and error vs throughput with the Pareto fronts.
+    #[arg(long, value_name = "PARETO.svg")]
+    plot: Option<String>,
 }
 
 #[derive(Args)]
@@ -878,6 +881,14 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
         ));
     }
     let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
+    if let Some(p) = &a.plot
+        && !p.ends_with(".svg")
+    {
+        return Err(arg_error(
+            "--plot",
+            format!("`{p}`: only SVG is written (give a .svg file)"),
+        ));
+    }
     let file = igemu::files::TomlFile::read(&a.grid)?;
     let configs = grid::Grid::parse(&file)?.expand(&file)?;
     let scenes: Vec<Scene> = if a.scenes.is_empty() {
@@ -951,6 +962,12 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
         a.out
     );
     let rows = &summary.rows;
+    if let Some(p) = &a.plot {
+        std::fs::write(p, pareto::svg(rows, axes[0])).map_err(|source| Error::Io {
+            path: p.clone(),
+            source,
+        })?;
+    }
     let front = pareto::front(rows, &axes);
     println!(
         "Pareto front on {} ({} of {} rows):",

@@ -236,6 +236,13 @@ fn pareto_front_keeps_exactly_the_non_dominated_rows() {
         let dominated = rows.iter().any(|o| pareto::dominates(o, r, &axes));
         assert_eq!(front.contains(&i), !dominated, "row {i}");
     }
+    let svg = pareto::svg(&rows, pareto::Axis::Error);
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<polyline").count(), 2);
+    let fc = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Cost]).len();
+    let ft = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Throughput]).len();
+    assert_eq!(svg.matches("fill=\"red\"").count(), fc + ft);
+    assert_eq!(svg.matches("fill=\"#999\"").count(), 2 * rows.len());
     assert!(pareto::Axis::parse_list("error").is_err());
     assert!(pareto::Axis::parse_list("error,bogus").is_err());
 }
