@@ -30,3 +30,4 @@ pub mod perceptual;
 pub mod pipeline;
 pub mod scene;
 pub mod stage;
+pub mod sweep;

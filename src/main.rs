@@ -39,6 +39,52 @@ enum Cmd {
     Hdl(HdlCmd),
     /// Hardware cost per stage: the analytic model, and with --synth yosys cell counts of the HDL models.
     Cost(CostArgs),
+    /// Word-width sweep: render every configuration of a grid, one JSON line each, and print the Pareto front.
+    Sweep(SweepArgs),
+    /// Observed min/max per signal and the narrowest format holding it; export the formats as typedefs.
+    Ranges(RangesArgs),
+}
+
+#[derive(Args)]
+struct RangesArgs {
+    #[command(flatten)]
+    s: SceneArgs,
+    /// Print the configuration's formats as ac_fixed, ap_fixed, systemc or verilog instead.
+    #[arg(long, value_parser = ["ac_fixed", "ap_fixed", "systemc", "verilog"])]
+    export: Option<String>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct SweepArgs {
+    /// Scene TOML files or embedded scene names (default: the embedded default scene).
+    scenes: Vec<String>,
+    /// Grid TOML: dotted hardware fields with lists of values (`gamma.dac_bits = [8, 9]`, `preset = [...]`).
+    #[arg(long)]
+    grid: String,
+    /// Output JSON-lines file (one row per configuration and scene).
+    #[arg(long)]
+    out: String,
+    /// Keep the complete rows already in OUT and run only the missing configurations.
+    #[arg(long)]
+    resume: bool,
+    /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Configurations rendered in parallel (1 = serial; results are identical).
+    #[arg(long, default_value_t = 1)]
+    jobs: usize,
+    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput.
+    #[arg(long, default_value = "error,cost")]
+    axes: String,
+    /// Run every phase for every configuration (no stage reuse between configurations).
+    #[arg(long)]
+    no_reuse: bool,
+    /// Write an SVG of error vs cost and error vs throughput with the Pareto fronts.
+    #[arg(long, value_name = "PARETO.svg")]
+    plot: Option<String>,
 }
 
 #[derive(Args)]
@@ -309,6 +355,8 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
         Cmd::Flicker(a) => flicker(a),
         Cmd::Hdl(HdlCmd::Vectors(a)) => hdl_vectors(a),
         Cmd::Cost(a) => cost(a),
+        Cmd::Sweep(a) => sweep(a),
+        Cmd::Ranges(a) => ranges(a),
         Cmd::Dof(a) => {
             let d = calc::depth_of_field(a.f_number, a.coc, a.focal, a.distance)
                 .map_err(|m| arg_error("dof", m))?;
@@ -944,6 +992,176 @@ fn cost(a: CostArgs) -> Result<ExitCode, Error> {
         println!(
             "{:<11} {:>12} {:>10} {:>7} {:>6}  {synth}",
             st.name, c.storage_bits, c.lut_bits, adders, mults
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
+    use igemu::sweep::{self, grid, pareto};
+    // Everything is checked before the first render.
+    let shard = match &a.shard {
+        Some(s) => Some(grid::Shard::parse(s).map_err(|m| arg_error("--shard", m))?),
+        None => None,
+    };
+    if a.jobs == 0 || a.jobs > 1024 {
+        return Err(arg_error(
+            "--jobs",
+            format!("must be in 1..=1024, got {}", a.jobs),
+        ));
+    }
+    let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
+    if let Some(p) = &a.plot
+        && !p.ends_with(".svg")
+    {
+        return Err(arg_error(
+            "--plot",
+            format!("`{p}`: only SVG is written (give a .svg file)"),
+        ));
+    }
+    let file = igemu::files::TomlFile::read(&a.grid)?;
+    let configs = grid::Grid::parse(&file)?.expand(&file)?;
+    let scenes: Vec<Scene> = if a.scenes.is_empty() {
+        vec![Scene::default_scene()]
+    } else {
+        a.scenes
+            .iter()
+            .map(|s| load_scene(Some(s)))
+            .collect::<Result<_, _>>()?
+    };
+    for c in &configs {
+        for s in &scenes {
+            pipeline::guard_band(s, &c.hw).map_err(|e| {
+                arg_error(
+                    &a.grid,
+                    format!(
+                        "configuration {} ({}) on scene `{}`: {e}",
+                        c.index, c.canonical, s.name
+                    ),
+                )
+            })?;
+        }
+    }
+    let cache = sweep::cache::PhaseCache::new();
+    let opts = sweep::SweepOptions {
+        out: &a.out,
+        resume: a.resume,
+        shard,
+        jobs: a.jobs,
+        cache: if a.no_reuse { None } else { Some(&cache) },
+    };
+    // Progress with ETA on a terminal only (quiet when stderr is piped or redirected).
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let start = std::time::Instant::now();
+    let first = std::sync::Mutex::new(None::<usize>);
+    let progress = |done: usize, total: usize| {
+        if !tty {
+            return;
+        }
+        let mut f = first.lock().unwrap_or_else(|e| e.into_inner());
+        let base = *f.get_or_insert(done);
+        let secs = start.elapsed().as_secs_f64();
+        let eta = if done > base {
+            format!(
+                "{:.0} s",
+                secs / (done - base) as f64 * (total - done) as f64
+            )
+        } else {
+            "?".into()
+        };
+        let width = 30;
+        let fill = (done * width).checked_div(total).unwrap_or(width);
+        eprint!(
+            "\r[{}{}] {done}/{total}  {secs:.0} s elapsed, ETA {eta}   ",
+            "#".repeat(fill),
+            "-".repeat(width - fill)
+        );
+        if done == total {
+            eprintln!();
+        }
+    };
+    let summary = sweep::run(&configs, &scenes, &opts, &progress)?;
+    eprintln!(
+        "igemu sweep: {} configurations x {} scenes; this run: {} rows ({} kept from {}, {} computed) -> {}",
+        configs.len(),
+        scenes.len(),
+        summary.planned,
+        summary.reused,
+        a.out,
+        summary.computed,
+        a.out
+    );
+    let rows = &summary.rows;
+    if let Some(p) = &a.plot {
+        std::fs::write(p, pareto::svg(rows, axes[0])).map_err(|source| Error::Io {
+            path: p.clone(),
+            source,
+        })?;
+    }
+    let front = pareto::front(rows, &axes);
+    println!(
+        "Pareto front on {} ({} of {} rows):",
+        axes.iter()
+            .map(|x| x.name())
+            .collect::<Vec<_>>()
+            .join(" x "),
+        front.len(),
+        rows.len()
+    );
+    print!("  {:>5}  {:<16}", "index", "scene");
+    for x in &axes {
+        print!("  {:>18}", x.name());
+    }
+    println!("  configuration");
+    for &i in &front {
+        let r = &rows[i];
+        print!("  {:>5}  {:<16}", r.index, r.scene);
+        for x in &axes {
+            print!("  {:>18.4}", x.value(r));
+        }
+        let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        println!("  {}", cfg.join(" "));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn ranges(a: RangesArgs) -> Result<ExitCode, Error> {
+    use igemu::sweep::ranges::{self, Export};
+    if let Some(e) = &a.export {
+        let hw = HwConfig::resolve(a.s.hw.as_deref())?;
+        let lang = match e.as_str() {
+            "ac_fixed" => Export::AcFixed,
+            "ap_fixed" => Export::ApFixed,
+            "systemc" => Export::SystemC,
+            _ => Export::Verilog,
+        };
+        print!("{}", ranges::export(&hw, lang));
+        return Ok(ExitCode::SUCCESS);
+    }
+    let r = run(&a.s, RenderOptions { stage_local: false })?;
+    let rows = ranges::ranges(&r.report.stages);
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).expect("serialisable")
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+        "stage", "signal", "format", "min (LSB)", "max (LSB)", "narrowest", "overflows"
+    );
+    for s in rows {
+        let opt = |v: Option<i128>| v.map_or("-".to_string(), |v| v.to_string());
+        println!(
+            "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+            s.stage,
+            s.signal,
+            s.format,
+            opt(s.min),
+            opt(s.max),
+            s.narrowest.unwrap_or_else(|| "-".into()),
+            s.overflows
         );
     }
     Ok(ExitCode::SUCCESS)

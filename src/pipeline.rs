@@ -264,6 +264,7 @@ fn compare_frags(fx: &[Frag], fl: &[FragF], i_err: &mut LocalError, z_err: &mut 
     }
 }
 
+#[derive(Clone)]
 /// Phase 1: host front end, input quantisation and the plan's region.
 pub struct Front {
     /// Host scene (f64 screen-space primitives).
@@ -347,6 +348,7 @@ pub fn front(scene: &Scene, hw: &HwConfig) -> Result<Front> {
     })
 }
 
+#[derive(Clone)]
 /// Phase 2 output: the resolved sample buffers, fixed and float.
 pub struct Geometry {
     /// Fixed sample buffer.
@@ -594,6 +596,7 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
     })
 }
 
+#[derive(Clone)]
 /// Phase 3 output: the frame memory, fixed and float.
 pub struct Accumulated {
     /// Fixed frame memory, depth and coverage.
@@ -788,6 +791,19 @@ pub fn render_ext(
     opts: RenderOptions,
     dof_reference: bool,
 ) -> Result<Render> {
+    render_cached(scene, hw, opts, dof_reference, None)
+}
+
+/// [`render_ext`] reusing the phases up to the frame memory (front, geometry, accumulate,
+/// depth of field) from `cache` when only late-only fields (gamma, dither) changed; used by
+/// sweeps (see [`crate::sweep::cache`]). The result is identical to an uncached render.
+pub fn render_cached(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RenderOptions,
+    dof_reference: bool,
+    cache: Option<&crate::sweep::cache::PhaseCache>,
+) -> Result<Render> {
     let log_add = hw.coding.kind == CodingKind::LogAdd;
     if log_add && !matches!(scene.camera.lens, crate::scene::Lens::Pinhole) {
         return Err(FileError {
@@ -802,8 +818,34 @@ pub fn render_ext(
         }
         .into());
     }
-    let mut f = front(scene, hw)?;
-    let mut g = geometry(&f, hw, opts)?;
+    let cached = match cache {
+        Some(c) if hw.coding.kind == CodingKind::Linear => {
+            Some(c.early(scene, hw, opts, dof_reference, || {
+                let f = front(scene, hw)?;
+                let g = geometry(&f, hw, opts)?;
+                let mut a = accumulate_phase(&f, &g, hw, opts)?;
+                let r_dof = crate::stage::dof::run_stage(
+                    scene,
+                    hw,
+                    &mut a.frame,
+                    &mut a.frame_ref,
+                    opts.stage_local,
+                    dof_reference,
+                )?;
+                let sp = pack_sample_buffer(f.qprims.len(), &g.samples, hw);
+                Ok((f, g, a, r_dof, sp))
+            })?)
+        }
+        _ => None,
+    };
+    let (mut f, mut g, mut early_a, mut early_sample_pack) = match cached {
+        Some((f, g, a, r_dof, sp)) => (f, g, Some((a, r_dof)), Some(sp)),
+        None => {
+            let f = front(scene, hw)?;
+            let g = geometry(&f, hw, opts)?;
+            (f, g, None, None)
+        }
+    };
     // Log coding: the `logdomain` stage (encoder; potentiation LUT or log accumulation).
     let log_stage = if hw.coding.kind != CodingKind::Linear {
         Some(logdomain::encode_phase(&mut f, &mut g, scene, hw)?)
@@ -815,6 +857,11 @@ pub fn render_ext(
             let (a, add) = logdomain::accumulate_phase(&f, &g, scene, hw, &mut r, opts)?;
             let p = logdomain::post(&a, &add, scene, hw, opts);
             (a, p, vec![r], None)
+        }
+        (_, r) if early_a.is_some() => {
+            let (a, r_dof) = early_a.take().expect("checked");
+            let p = post(&a, scene, hw, opts)?;
+            (a, p, r.into_iter().collect(), r_dof)
         }
         (_, r) => {
             let mut a = accumulate_phase(&f, &g, hw, opts)?;
@@ -873,7 +920,14 @@ pub fn render_ext(
         &a.tile_rmw,
         hw.accumulate.frame.format.total_bits(),
     );
-    let packed = pack_checks(f.qprims.len(), &g.samples, &a.frame, scene, hw);
+    let packed = pack_checks(
+        f.qprims.len(),
+        &g.samples,
+        &a.frame,
+        scene,
+        hw,
+        early_sample_pack.take(),
+    );
     let planned: Vec<String> = stages.iter().map(|s| s.name.clone()).collect();
     let cycles = crate::cycles::report(
         &workload,
@@ -935,6 +989,7 @@ fn pack_checks(
     frame: &Frame,
     scene: &Scene,
     hw: &HwConfig,
+    sample_pack: Option<crate::cycles::cost::PackCheck>,
 ) -> Vec<crate::cycles::cost::PackCheck> {
     use crate::cycles::cost::pack;
     let fb = hw.accumulate.frame.format.total_bits();
@@ -959,6 +1014,17 @@ fn pack_checks(
         lut.cost().lut_bits,
         |r, _| lut.table[r] as u64,
     ));
+    out.push(sample_pack.unwrap_or_else(|| pack_sample_buffer(prims, s, hw)));
+    out
+}
+
+/// The sample-buffer pack check (depends only on the early phases: cached by sweeps).
+pub fn pack_sample_buffer(
+    prims: usize,
+    s: &Samples,
+    hw: &HwConfig,
+) -> crate::cycles::cost::PackCheck {
+    use crate::cycles::cost::pack;
     let zb = hw.visibility.z.format.total_bits();
     let ib = hw.input.intensity.format.total_bits();
     let id_bits = (prims as u64 + 1)
@@ -966,7 +1032,7 @@ fn pack_checks(
         .trailing_zeros()
         .max(1);
     let zmax = hw.visibility.z.format.max_code() as u64;
-    out.push(pack(
+    pack(
         "sample buffer (modelled region)",
         s.z.len(),
         &[zb, ib, id_bits],
@@ -976,8 +1042,7 @@ fn pack_checks(
             1 => s.i[r] as u64,
             _ => s.prim[r] as u64,
         },
-    ));
-    out
+    )
 }
 
 /// The background's intensity code (quantised like a vertex intensity).

@@ -1,0 +1,218 @@
+//! Sweep grids: a TOML file naming hardware fields by dotted paths with lists of values.
+//!
+//! ```toml
+//! preset = ["linear12", "linear11"]      # optional: base presets
+//! accumulate.frame = ["UQ11.0", "UQ12.0"]
+//! gamma.dac_bits = [8, 9]
+//! ```
+//!
+//! The grid expands to the cartesian product of its lists. Fields are taken in sorted
+//! path order (`preset` sorts with the others) and the last field varies fastest, so the
+//! order is deterministic. Every configuration is built as a hardware TOML text and parsed
+//! by [`HwConfig::from_toml`], so a grid accepts exactly the fields and ranges a hardware
+//! file accepts, and a bad value is reported before any render starts.
+
+use crate::error::FileError;
+use crate::files::TomlFile;
+use crate::hw::HwConfig;
+use std::collections::BTreeMap;
+
+/// One point of the grid: field path -> value, plus the validated hardware.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Position in the expanded grid (0-based).
+    pub index: usize,
+    /// Field path -> value (TOML value).
+    pub fields: BTreeMap<String, toml::Value>,
+    /// The canonical text `path=value;...` (sorted paths): the key of the stable id.
+    pub canonical: String,
+    /// The hardware it describes.
+    pub hw: HwConfig,
+}
+
+/// A parsed grid.
+#[derive(Clone, Debug)]
+pub struct Grid {
+    /// Field path -> list of values, sorted by path.
+    pub axes: Vec<(String, Vec<toml::Value>)>,
+}
+
+fn flatten(
+    file: &TomlFile,
+    prefix: &str,
+    t: &toml::Table,
+    out: &mut Vec<(String, Vec<toml::Value>)>,
+) -> Result<(), FileError> {
+    for (k, v) in t {
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        match v {
+            toml::Value::Table(sub) => flatten(file, &path, sub, out)?,
+            toml::Value::Array(a) if a.is_empty() => {
+                return Err(file.error(
+                    &path,
+                    "the list of values is empty; give at least one value",
+                ));
+            }
+            toml::Value::Array(a) => out.push((path, a.clone())),
+            other => {
+                return Err(file.error(
+                    &path,
+                    format!(
+                        "must be a list of values (e.g. `{path} = [{other}]`), got a single {}",
+                        other.type_str()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Stable 64-bit FNV-1a hash (documented constants: offset 0xcbf29ce484222325, prime 0x100000001b3);
+/// unlike `std`'s `DefaultHasher` it is the same on every build and platform.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// Largest number of configurations a grid may expand to.
+pub const MAX_CONFIGS: usize = 100_000;
+
+impl Grid {
+    /// Parses a grid file (syntax, lists; not yet the values).
+    pub fn parse(file: &TomlFile) -> Result<Grid, FileError> {
+        let t: toml::Table = file.parse()?;
+        let mut axes = Vec::new();
+        flatten(file, "", &t, &mut axes)?;
+        if axes.is_empty() {
+            return Err(file.error(
+                "",
+                "the grid names no field; give e.g. `gamma.dac_bits = [8, 9]`",
+            ));
+        }
+        let mut n: usize = 1;
+        for (p, v) in &axes {
+            n = n.saturating_mul(v.len());
+            if n > MAX_CONFIGS {
+                return Err(file.error(
+                    p,
+                    format!("the grid expands to more than {MAX_CONFIGS} configurations"),
+                ));
+            }
+        }
+        Ok(Grid { axes })
+    }
+
+    /// Number of configurations.
+    pub fn len(&self) -> usize {
+        self.axes.iter().map(|(_, v)| v.len()).product()
+    }
+
+    /// Whether the grid is empty (never, after [`Grid::parse`]).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Expands and validates every configuration, in order. The first bad one is an error
+    /// naming the grid file, the field and the value.
+    pub fn expand(&self, file: &TomlFile) -> Result<Vec<Config>, FileError> {
+        let total = self.len();
+        let mut out = Vec::with_capacity(total);
+        for index in 0..total {
+            let mut rest = index;
+            let mut picks = vec![0usize; self.axes.len()];
+            for (k, (_, vals)) in self.axes.iter().enumerate().rev() {
+                picks[k] = rest % vals.len();
+                rest /= vals.len();
+            }
+            let mut fields = BTreeMap::new();
+            let mut text = String::new();
+            let mut canonical = String::new();
+            for (k, (path, vals)) in self.axes.iter().enumerate() {
+                let v = &vals[picks[k]];
+                fields.insert(path.clone(), v.clone());
+                text.push_str(&format!("{path} = {v}\n"));
+                if !canonical.is_empty() {
+                    canonical.push(';');
+                }
+                canonical.push_str(&format!("{path}={v}"));
+            }
+            let hw_file = TomlFile::from_text(&canonical, &text);
+            let mut hw = HwConfig::from_toml(&hw_file).map_err(|e| {
+                // Point at the grid field: the unknown or out-of-range one if known.
+                let field = if e.field.is_empty() {
+                    self.axes
+                        .iter()
+                        .map(|(p, _)| p.as_str())
+                        .find(|p| e.msg.contains(p.rsplit('.').next().unwrap_or(p)))
+                        .unwrap_or("")
+                        .to_string()
+                } else {
+                    e.field.clone()
+                };
+                let (line, col) = file
+                    .locate(&field)
+                    .map_or((None, None), |(l, c)| (Some(l), Some(c)));
+                FileError {
+                    file: file.name.clone(),
+                    line,
+                    col,
+                    field,
+                    msg: format!("configuration {index} ({canonical}): {}", e.msg),
+                }
+            })?;
+            hw.name = canonical.clone();
+            out.push(Config {
+                index,
+                fields,
+                canonical,
+                hw,
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// A shard `K/N` (1-based K): a contiguous block of the job list, so the shard files
+/// concatenated in K order equal the unsharded output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based shard number.
+    pub k: usize,
+    /// Number of shards.
+    pub n: usize,
+}
+
+impl Shard {
+    /// Parses `K/N` with 1 <= K <= N.
+    pub fn parse(s: &str) -> Result<Shard, String> {
+        let (k, n) = s
+            .split_once('/')
+            .ok_or_else(|| format!("`{s}` is not K/N (e.g. 2/4)"))?;
+        let k: usize = k
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{s}`: K must be a positive integer"))?;
+        let n: usize = n
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{s}`: N must be a positive integer"))?;
+        if n == 0 || k == 0 || k > n {
+            return Err(format!("`{s}`: need 1 <= K <= N, got K = {k}, N = {n}"));
+        }
+        Ok(Shard { k, n })
+    }
+
+    /// The half-open range of job indices of this shard among `total` jobs.
+    pub fn range(&self, total: usize) -> std::ops::Range<usize> {
+        (self.k - 1) * total / self.n..self.k * total / self.n
+    }
+}

@@ -1,0 +1,159 @@
+//! Observed ranges of the instrumented signals and the narrowest formats holding them,
+//! and an export of a configuration's formats as HLS / SystemC typedefs and Verilog parameters.
+
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer, SignalStats};
+use crate::hw::HwConfig;
+use serde::Serialize;
+
+/// One signal's observed range.
+#[derive(Clone, Debug, Serialize)]
+pub struct SignalRange {
+    /// Stage.
+    pub stage: String,
+    /// Signal name.
+    pub signal: String,
+    /// Configured format.
+    pub format: String,
+    /// Values recorded.
+    pub count: u64,
+    /// Smallest and largest value seen, in the format's LSBs (before overflow handling).
+    pub min: Option<i128>,
+    /// Largest value.
+    pub max: Option<i128>,
+    /// Narrowest format with the same LSB that holds [min, max] (`None` when nothing was seen).
+    pub narrowest: Option<String>,
+    /// Overflows counted.
+    pub overflows: u64,
+}
+
+/// Bits of the narrowest word with `frac` fraction bits holding `[min, max]` LSBs, as a format.
+/// Integer bits never go below 0 (the LSB is kept); as everywhere in igemu, a signed
+/// format's integer bits count the sign bit.
+pub fn narrowest(min: i128, max: i128, frac: u32) -> QFormat {
+    let signed = min < 0;
+    let bits_for = |v: i128| 128 - v.leading_zeros();
+    let w = if signed {
+        // -2^(w-1) <= min and max <= 2^(w-1) - 1.
+        let need_neg = bits_for(-(min + 1)) + 1;
+        let need_pos = bits_for(max.max(0)) + 1;
+        need_neg.max(need_pos)
+    } else {
+        bits_for(max).max(1)
+    };
+    QFormat::new(signed, w.saturating_sub(frac), frac)
+}
+
+/// Ranges of every instrumented signal of a render, in stage order.
+pub fn ranges(stages: &[crate::stage::StageReport]) -> Vec<SignalRange> {
+    let mut out = Vec::new();
+    for st in stages {
+        for s in &st.signals {
+            out.push(range_of(&st.name, s));
+        }
+    }
+    out
+}
+
+fn range_of(stage: &str, s: &SignalStats) -> SignalRange {
+    SignalRange {
+        stage: stage.to_string(),
+        signal: s.name.clone(),
+        format: s.format.to_string(),
+        count: s.count,
+        min: s.min,
+        max: s.max,
+        narrowest: match (s.min, s.max) {
+            (Some(a), Some(b)) => Some(narrowest(a, b, s.format.frac_bits).to_string()),
+            _ => None,
+        },
+        overflows: s.overflows,
+    }
+}
+
+fn ac_quant(q: Quant) -> &'static str {
+    match q {
+        Quant::Trn => "TRN",
+        Quant::TrnZero => "TRN_ZERO",
+        Quant::Rnd => "RND",
+        Quant::RndZero => "RND_ZERO",
+        Quant::RndInf => "RND_INF",
+        Quant::RndMinInf => "RND_MIN_INF",
+        Quant::RndConv => "RND_CONV",
+    }
+}
+
+fn ac_overflow(o: Overflow) -> &'static str {
+    match o {
+        Overflow::Wrap | Overflow::Error => "WRAP",
+        Overflow::Sat => "SAT",
+        Overflow::SatZero => "SAT_ZERO",
+        Overflow::SatSym => "SAT_SYM",
+    }
+}
+
+/// The configuration's quantisation points: (identifier, quantizer).
+pub fn formats(hw: &HwConfig) -> Vec<(&'static str, Quantizer)> {
+    vec![
+        ("input_coord", hw.input.coord),
+        ("input_z", hw.input.z),
+        ("input_intensity", hw.input.intensity),
+        ("visibility_z", hw.visibility.z),
+        ("accumulate_frame", hw.accumulate.frame),
+        (
+            "gamma_dac",
+            Quantizer::new(
+                QFormat::new(false, hw.gamma.dac_bits, 0),
+                hw.gamma.quant,
+                Overflow::Sat,
+            ),
+        ),
+    ]
+}
+
+/// Export languages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Export {
+    /// Algorithmic C `ac_fixed`.
+    AcFixed,
+    /// Vitis HLS `ap_fixed`.
+    ApFixed,
+    /// SystemC `sc_fixed`.
+    SystemC,
+    /// Verilog `localparam`s (width and fraction bits).
+    Verilog,
+}
+
+/// The typedefs / parameters of a configuration. `I` counts the sign bit, as in all three
+/// C++ libraries; the overflow mode `ERROR` has no C++ equivalent and is exported as WRAP.
+pub fn export(hw: &HwConfig, lang: Export) -> String {
+    let mut s = format!("// igemu formats of `{}`\n", hw.name);
+    for (id, q) in formats(hw) {
+        let f = q.format;
+        let (w, i) = (f.total_bits(), f.int_bits);
+        let (qm, om) = (ac_quant(q.quant), ac_overflow(q.overflow));
+        let line = match lang {
+            Export::AcFixed => format!(
+                "typedef ac_fixed<{w}, {i}, {}, AC_{qm}, AC_{om}> {id}_t;  // {f}\n",
+                f.signed
+            ),
+            Export::ApFixed => format!(
+                "typedef {}<{w}, {i}, AP_{qm}, AP_{om}> {id}_t;  // {f}\n",
+                if f.signed { "ap_fixed" } else { "ap_ufixed" }
+            ),
+            Export::SystemC => format!(
+                "typedef sc_dt::{}<{w}, {i}, sc_dt::SC_{qm}, sc_dt::SC_{om}> {id}_t;  // {f}\n",
+                if f.signed { "sc_fixed" } else { "sc_ufixed" }
+            ),
+            Export::Verilog => {
+                let up = id.to_uppercase();
+                format!(
+                    "localparam integer {up}_W = {w};  // {f}\nlocalparam integer {up}_F = {};\nlocalparam integer {up}_SIGNED = {};\n",
+                    f.frac_bits,
+                    u8::from(f.signed)
+                )
+            }
+        };
+        s.push_str(&line);
+    }
+    s
+}

@@ -1,0 +1,348 @@
+//! Sweeps: grid expansion and validation, resume after a real kill, shards, parallel = serial.
+
+mod common;
+
+use igemu::files::TomlFile;
+use igemu::sweep::{self, grid, pareto};
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("igemu-sweep-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+/// A small scene file: a shaded triangle, a line and a light point on 160x120.
+fn scene_file(dir: &std::path::Path) -> String {
+    let objects = [
+        common::tri(
+            [[10.0, 10.0, 0.3], [150.0, 20.0, 0.5], [40.0, 110.0, 0.7]],
+            [0.05, 0.9, 0.4],
+        ),
+        common::line([5.0, 100.0, 0.2], [155.0, 60.0, 0.2], 0.7, 1.5),
+        common::point(80.0, 30.0, 0.1, 1.0, 2.0),
+    ]
+    .concat();
+    let text = format!(
+        "[image]\nwidth = 160\nheight = 120\nbackground = 0.02\n\n\
+         [camera]\nposition = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nfov_y_deg = 40.0\nnear = 1.0\nfar = 100.0\n\n\
+         [display]\ncontrast = 100.0\ngamma = 2.4\nweber = 0.02\nb_max = 100.0\n\n{objects}"
+    );
+    let p = dir.join("small.toml");
+    std::fs::write(&p, text).expect("write scene");
+    p.to_string_lossy().into_owned()
+}
+
+fn grid_file(dir: &std::path::Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write grid");
+    p.to_string_lossy().into_owned()
+}
+
+fn igemu(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_igemu"))
+        .args(args)
+        .output()
+        .expect("run igemu")
+}
+
+fn rows(path: &str) -> Vec<serde_json::Value> {
+    let (rows, dropped) = sweep::read_rows(path).expect("read rows");
+    assert!(!dropped, "{path} has a partial line");
+    rows.iter().map(sweep::without_timing).collect()
+}
+
+const GRID: &str = "accumulate.frame = [\"UQ10.0\", \"UQ11.0\", \"UQ12.0\"]\n\
+                    gamma.dac_bits = [6, 8]\npreset = [\"linear12\"]\n";
+
+#[test]
+fn expansion_is_ordered_last_field_fastest_and_validated() {
+    let f = TomlFile::from_text("g.toml", GRID);
+    let g = grid::Grid::parse(&f).unwrap();
+    assert_eq!(g.len(), 6);
+    let c = g.expand(&f).unwrap();
+    let keys: Vec<&str> = c.iter().map(|c| c.canonical.as_str()).collect();
+    assert_eq!(
+        keys[0],
+        "accumulate.frame=\"UQ10.0\";gamma.dac_bits=6;preset=\"linear12\""
+    );
+    assert_eq!(
+        keys[1],
+        "accumulate.frame=\"UQ10.0\";gamma.dac_bits=8;preset=\"linear12\""
+    );
+    assert_eq!(c[5].hw.accumulate.frame.format.int_bits, 12);
+    assert_eq!(c[5].hw.gamma.dac_bits, 8);
+    // The vertex intensity follows the accumulator, as in a hardware file.
+    assert_eq!(c[0].hw.input.intensity.format.int_bits, 10);
+    // Ids are stable (FNV-1a) and distinct.
+    let ids: std::collections::BTreeSet<String> =
+        c.iter().map(|c| sweep::row_id("s", &c.canonical)).collect();
+    assert_eq!(ids.len(), 6);
+    assert_eq!(grid::fnv1a(b""), 0xcbf2_9ce4_8422_2325);
+    assert_eq!(grid::fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+}
+
+#[test]
+fn bad_grids_and_shards_exit_2_before_any_work() {
+    let d = tmp("bad");
+    let out = d.join("out.jsonl");
+    let out_s = out.to_string_lossy().into_owned();
+    let cases = [
+        ("unknown.toml", "gamma.dac_bitz = [8, 9]\n", "dac_bitz"),
+        ("empty.toml", "gamma.dac_bits = []\n", "empty"),
+        ("range.toml", "gamma.dac_bits = [8, 17]\n", "1..=16"),
+        ("scalar.toml", "gamma.dac_bits = 8\n", "list"),
+        ("preset.toml", "preset = [\"linear99\"]\n", "linear99"),
+    ];
+    for (name, text, expect) in cases {
+        let g = grid_file(&d, name, text);
+        let o = igemu(&["sweep", "--grid", &g, "--out", &out_s]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(expect), "{name}: {err}");
+        assert!(err.contains(name), "{name} names the file: {err}");
+        assert!(!out.exists(), "{name}: no work before the error");
+    }
+    let g = grid_file(&d, "ok.toml", "gamma.dac_bits = [8]\n");
+    for shard in ["3/2", "0/2", "1/0", "x"] {
+        let o = igemu(&["sweep", "--grid", &g, "--out", &out_s, "--shard", shard]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{shard}: {err}");
+        assert!(err.contains("--shard"), "{err}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn shards_concatenate_to_the_full_run_and_parallel_equals_serial() {
+    let d = tmp("shards");
+    let scene = scene_file(&d);
+    let g = grid_file(&d, "g.toml", GRID);
+    let full = d.join("full.jsonl").to_string_lossy().into_owned();
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &full]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let full_rows = rows(&full);
+    assert_eq!(full_rows.len(), 6);
+    for (i, r) in full_rows.iter().enumerate() {
+        assert_eq!(r["index"], i);
+    }
+    let mut cat = Vec::new();
+    for k in 1..=4 {
+        let p = d.join(format!("s{k}.jsonl")).to_string_lossy().into_owned();
+        let o = igemu(&[
+            "sweep",
+            &scene,
+            "--grid",
+            &g,
+            "--out",
+            &p,
+            "--shard",
+            &format!("{k}/4"),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        cat.extend(rows(&p));
+    }
+    assert_eq!(cat, full_rows);
+    let par = d.join("par.jsonl").to_string_lossy().into_owned();
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &par, "--jobs", "3"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(rows(&par), full_rows);
+    // The Pareto table is printed.
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("Pareto front"), "{stdout}");
+}
+
+#[test]
+fn a_killed_sweep_resumes_to_the_uninterrupted_result() {
+    let d = tmp("kill");
+    let scene = scene_file(&d);
+    let g = grid_file(
+        &d,
+        "g.toml",
+        "accumulate.frame = [\"UQ9.0\", \"UQ10.0\", \"UQ11.0\", \"UQ12.0\"]\n\
+         gamma.dac_bits = [6, 7, 8, 9, 10]\nraster.samples = [4, 8]\n",
+    );
+    let full = d.join("full.jsonl").to_string_lossy().into_owned();
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &full]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let full_rows = rows(&full);
+    assert_eq!(full_rows.len(), 40);
+
+    let out = d.join("killed.jsonl").to_string_lossy().into_owned();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_igemu"))
+        .args(["sweep", &scene, "--grid", &g, "--out", &out])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("spawn");
+    // Wait for a few completed rows, then SIGKILL.
+    let t = std::time::Instant::now();
+    loop {
+        let n = std::fs::read_to_string(&out)
+            .map(|s| s.matches('\n').count())
+            .unwrap_or(0);
+        if n >= 3 || t.elapsed().as_secs() > 60 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().expect("kill");
+    let status = child.wait().expect("wait");
+    assert!(!status.success(), "the sweep was killed, not finished");
+    let (before, _) = sweep::read_rows(&out).unwrap();
+    assert!(
+        !before.is_empty() && before.len() < 40,
+        "killed mid-run: {} rows",
+        before.len()
+    );
+    // Simulate a partial last line as a kill inside a write would leave it.
+    {
+        use std::io::Write;
+        let mut f = std::fs::OpenOptions::new().append(true).open(&out).unwrap();
+        f.write_all(b"{\"id\":\"0123\",\"index\":").unwrap();
+    }
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out, "--resume"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(&format!("{} kept", before.len())),
+        "reuses the completed rows: {err}"
+    );
+    let resumed = rows(&out);
+    let ids: std::collections::BTreeSet<&str> =
+        resumed.iter().map(|r| r["id"].as_str().unwrap()).collect();
+    assert_eq!(ids.len(), 40, "every configuration exactly once");
+    assert_eq!(resumed, full_rows);
+    // Resuming a complete file computes nothing.
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out, "--resume"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("40 kept"));
+    assert_eq!(rows(&out), full_rows);
+}
+
+#[test]
+fn pareto_front_keeps_exactly_the_non_dominated_rows() {
+    let d = tmp("pareto");
+    let scene = scene_file(&d);
+    let g = grid_file(&d, "g.toml", GRID);
+    let out = d.join("o.jsonl").to_string_lossy().into_owned();
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out]);
+    assert!(o.status.success());
+    let (rows, _) = sweep::read_rows(&out).unwrap();
+    let axes = pareto::Axis::parse_list("error,cost").unwrap();
+    let front = pareto::front(&rows, &axes);
+    assert!(!front.is_empty());
+    for (i, r) in rows.iter().enumerate() {
+        let dominated = rows.iter().any(|o| pareto::dominates(o, r, &axes));
+        assert_eq!(front.contains(&i), !dominated, "row {i}");
+    }
+    let svg = pareto::svg(&rows, pareto::Axis::Error);
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<polyline").count(), 2);
+    let fc = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Cost]).len();
+    let ft = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Throughput]).len();
+    assert_eq!(svg.matches("fill=\"red\"").count(), fc + ft);
+    assert_eq!(svg.matches("fill=\"#999\"").count(), 2 * rows.len());
+    assert!(pareto::Axis::parse_list("error").is_err());
+    assert!(pareto::Axis::parse_list("error,bogus").is_err());
+}
+
+#[test]
+fn stage_reuse_gives_the_rows_of_full_renders() {
+    let d = tmp("reuse");
+    let scene_path = scene_file(&d);
+    let scene = igemu::scene::Scene::load(&scene_path).unwrap();
+    let text = "gamma.dac_bits = [6, 8, 10]\ndither.kind = [\"none\", \"bayer4\"]\n\
+                accumulate.frame = [\"UQ10.0\", \"UQ12.0\"]\n";
+    let f = TomlFile::from_text("g.toml", text);
+    let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
+    let cache = sweep::cache::PhaseCache::new();
+    let mut outs = Vec::new();
+    for (name, c) in [("cached", Some(&cache)), ("full", None)] {
+        let out = d
+            .join(format!("{name}.jsonl"))
+            .to_string_lossy()
+            .into_owned();
+        let opts = sweep::SweepOptions {
+            out: &out,
+            resume: false,
+            shard: None,
+            jobs: 1,
+            cache: c,
+        };
+        sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).unwrap();
+        outs.push(rows(&out));
+    }
+    assert_eq!(outs[0].len(), 12);
+    assert_eq!(outs[0], outs[1]);
+    // accumulate.frame varies slowest: 2 misses, 10 hits.
+    assert_eq!(cache.stats(), (10, 2));
+}
+
+#[test]
+fn narrowest_formats_hold_the_observed_range_and_no_narrower_does() {
+    use igemu::sweep::ranges::narrowest;
+    for (min, max, frac) in [
+        (0i128, 0i128, 0u32),
+        (0, 255, 0),
+        (0, 256, 0),
+        (3, 57438, 4),
+        (-1, 0, 2),
+        (-128, 127, 0),
+        (-129, 5, 3),
+        (-5, 1000, 4),
+    ] {
+        let f = narrowest(min, max, frac);
+        assert_eq!(f.frac_bits, frac);
+        let holds =
+            |f: &igemu::fixed::QFormat| f.min_code() as i128 <= min && max <= f.max_code() as i128;
+        assert!(holds(&f), "{f} holds [{min}, {max}]");
+        if f.int_bits > 0 {
+            let smaller = igemu::fixed::QFormat::new(f.signed, f.int_bits - 1, frac);
+            if smaller.total_bits() > 0 {
+                assert!(!holds(&smaller), "{smaller} would do for [{min}, {max}]");
+            }
+        }
+    }
+}
+
+#[test]
+fn ranges_cli_reports_signals_and_exports_typedefs() {
+    let d = tmp("ranges");
+    let scene = scene_file(&d);
+    let o = igemu(&["ranges", &scene, "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let frame = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["signal"] == "accumulate.frame")
+        .expect("accumulate.frame is instrumented");
+    assert!(frame["max"].as_i64().unwrap() <= 4095);
+    assert!(frame["narrowest"].as_str().unwrap().starts_with("UQ"));
+    for (lang, expect) in [
+        (
+            "ac_fixed",
+            "typedef ac_fixed<12, 12, false, AC_RND_CONV, AC_SAT> accumulate_frame_t;",
+        ),
+        (
+            "ap_fixed",
+            "typedef ap_fixed<17, 13, AP_RND_CONV, AP_SAT> input_coord_t;",
+        ),
+        (
+            "systemc",
+            "sc_dt::sc_ufixed<8, 8, sc_dt::SC_RND_CONV, sc_dt::SC_SAT> gamma_dac_t;",
+        ),
+        ("verilog", "localparam integer ACCUMULATE_FRAME_W = 12;"),
+    ] {
+        let o = igemu(&["ranges", "--export", lang]);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success());
+        assert!(out.contains(expect), "{lang}: {out}");
+    }
+    assert_eq!(
+        igemu(&["ranges", "--export", "vhdl"]).status.code(),
+        Some(2)
+    );
+}
