@@ -378,14 +378,12 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
         .map(|p| setup::setup(p, &grid, &mut sw))
         .collect();
     r_setup.fixed_ms = ms_since(t);
-    for (k, v) in [
+    r_setup.record_work(&[
         ("triangles", sw.triangles),
         ("degenerate", sw.degenerate),
         ("lines", sw.lines),
         ("points", sw.points),
-    ] {
-        r_setup.work.insert(k.into(), v);
-    }
+    ]);
     let cb = hw.input.coord.format.total_bits();
     r_setup.cost.multipliers = vec![
         Unit::mul("edge start (x * dy)", 1, cb + 1, cb + 1),
@@ -493,15 +491,13 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
         };
         points.push(PointFrags { i, samples: vis });
     }
-    for (k, v) in [
+    r_raster.record_work(&[
         ("spans", rw.spans),
         ("samples", rw.samples),
         ("walked_samples", rw.walked),
         ("walked_rows", rw.rows_walked),
         ("reseeds", rw.reseeds),
-    ] {
-        r_raster.work.insert(k.into(), v);
-    }
+    ]);
     let g = hw.raster.interp_guard_bits;
     r_raster.cost.adders = vec![
         Unit::adder("edge quotient/remainder", 6, cb + 2),
@@ -522,14 +518,12 @@ pub fn geometry(f: &Front, hw: &HwConfig, opts: RenderOptions) -> Result<Geometr
             serde_json::to_value(z_err.finish()).unwrap_or_default(),
         );
     }
-    for (k, v) in [
+    r_vis.record_work(&[
         ("tests", vw.tests),
         ("writes", vw.writes),
         ("point_tests", vw.point_tests),
         ("point_visible", vw.point_visible),
-    ] {
-        r_vis.work.insert(k.into(), v);
-    }
+    ]);
     let zb = hw.visibility.z.format.total_bits();
     let full_samples = grid.sw() as u64 * grid.sh() as u64;
     let id_bits = (f.qprims.len() as u64 + 1)
@@ -647,14 +641,12 @@ pub fn accumulate_phase(
         size,
     )?;
     r.fixed_ms = ms_since(t);
-    for (k, v) in [
+    r.record_work(&[
         ("pixels", aw.pixels),
         ("macs", aw.macs),
         ("fragments", aw.fragments),
         ("point_updates", aw.point_updates),
-    ] {
-        r.work.insert(k.into(), v);
-    }
+    ]);
     r.cost = accumulate::cost(&ap, i_fmt.total_bits(), size.0 as u64 * size.1 as u64);
     r.signals = acc_stats;
     let ar = |bg_i: f64| AccRef {

@@ -1174,16 +1174,14 @@ pub fn run_stage(
     r.notes.insert("object_coc_max_px".into(), coc_max.into());
     r.notes
         .insert("object_pixels_in_focus".into(), in_focus.into());
-    for (k, v) in [
+    r.record_work(&[
         ("layers", plan.layers.len() as u64),
         ("pixels", (w * h) as u64),
         ("macs", work.macs),
         ("divides", work.divides),
         ("composites", work.composites),
         ("passthrough", work.passthrough),
-    ] {
-        r.work.insert(k.into(), v);
-    }
+    ]);
     r.cost = cost(
         &plan,
         p,

@@ -827,14 +827,12 @@ pub fn accumulate_phase(
         },
     );
     enc_report.float_ms += ms_since(t);
-    for (key, v) in [
+    enc_report.record_work(&[
         ("pixels", work.pixels),
         ("term_adds", work.term_adds),
         ("log_adds", work.log_adds),
         ("saturations", work.saturations),
-    ] {
-        enc_report.work.insert(key.into(), v);
-    }
+    ]);
     let c = add.cost(npix as u64);
     enc_report.cost.storage_bits += c.storage_bits;
     enc_report.cost.lut_bits += c.lut_bits;

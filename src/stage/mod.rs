@@ -140,6 +140,15 @@ pub struct StageReport {
     pub notes: BTreeMap<String, serde_json::Value>,
 }
 
+impl StageReport {
+    /// Records work items (name, count) for the cycle model.
+    pub fn record_work(&mut self, items: &[(&str, u64)]) {
+        for &(k, v) in items {
+            self.work.insert(k.to_string(), v);
+        }
+    }
+}
+
 /// The sample grid: `n x n` samples per pixel on a coordinate grid of `2^sub_bits` units per pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Grid {
