@@ -106,23 +106,34 @@ pub fn weber(fixed: &[u16], reference: &[u16], m: &DisplayModel) -> WeberCompare
     let lum: Vec<f64> = (0..=m.max_code as u32)
         .map(|c| m.luminance(c as u16))
         .collect();
+    weber_of(
+        fixed
+            .iter()
+            .zip(reference)
+            .map(|(&a, &b)| (lum[a as usize], lum[b as usize])),
+        m.weber,
+    )
+}
+
+/// Weber statistics of (luminance, reference luminance) pairs against the threshold `delta`.
+pub fn weber_of(pairs: impl Iterator<Item = (f64, f64)>, delta: f64) -> WeberCompare {
     let mut w = WeberCompare {
-        delta: m.weber,
+        delta,
         ..Default::default()
     };
-    let mut sum = 0.0;
-    for (&a, &b) in fixed.iter().zip(reference) {
-        let (ba, bb) = (lum[a as usize], lum[b as usize]);
+    let (mut sum, mut n) = (0.0, 0u64);
+    for (ba, bb) in pairs {
         let f = (ba - bb).abs() / bb;
         sum += f;
+        n += 1;
         w.max = w.max.max(f);
-        if f > m.weber {
+        if f > delta {
             w.over_delta += 1;
         }
     }
-    if !fixed.is_empty() {
-        w.mean = sum / fixed.len() as f64;
-        w.over_delta_fraction = w.over_delta as f64 / fixed.len() as f64;
+    if n > 0 {
+        w.mean = sum / n as f64;
+        w.over_delta_fraction = w.over_delta as f64 / n as f64;
     }
     w
 }

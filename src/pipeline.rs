@@ -771,6 +771,27 @@ pub fn post(a: &Accumulated, scene: &Scene, hw: &HwConfig, opts: RenderOptions) 
     })
 }
 
+/// Phase 3 followed by the depth-of-field stage (which plans itself only for a thin lens).
+fn accumulate_and_dof(
+    f: &Front,
+    g: &Geometry,
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RenderOptions,
+    dof_reference: bool,
+) -> Result<(Accumulated, Option<StageReport>)> {
+    let mut a = accumulate_phase(f, g, hw, opts)?;
+    let r_dof = crate::stage::dof::run_stage(
+        scene,
+        hw,
+        &mut a.frame,
+        &mut a.frame_ref,
+        opts.stage_local,
+        dof_reference,
+    )?;
+    Ok((a, r_dof))
+}
+
 /// Runs the whole pipeline, fixed and float, and compares them.
 pub fn render(scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Render> {
     render_ext(scene, hw, opts, false)
@@ -815,15 +836,7 @@ pub fn render_cached(
             Some(c.early(scene, hw, opts, dof_reference, || {
                 let f = front(scene, hw)?;
                 let g = geometry(&f, hw, opts)?;
-                let mut a = accumulate_phase(&f, &g, hw, opts)?;
-                let r_dof = crate::stage::dof::run_stage(
-                    scene,
-                    hw,
-                    &mut a.frame,
-                    &mut a.frame_ref,
-                    opts.stage_local,
-                    dof_reference,
-                )?;
+                let (a, r_dof) = accumulate_and_dof(&f, &g, scene, hw, opts, dof_reference)?;
                 let sp = pack_sample_buffer(f.qprims.len(), &g.samples, hw);
                 Ok((f, g, a, r_dof, sp))
             })?)
@@ -856,15 +869,7 @@ pub fn render_cached(
             (a, p, r.into_iter().collect(), r_dof)
         }
         (_, r) => {
-            let mut a = accumulate_phase(&f, &g, hw, opts)?;
-            let r_dof = crate::stage::dof::run_stage(
-                scene,
-                hw,
-                &mut a.frame,
-                &mut a.frame_ref,
-                opts.stage_local,
-                dof_reference,
-            )?;
+            let (a, r_dof) = accumulate_and_dof(&f, &g, scene, hw, opts, dof_reference)?;
             let p = post(&a, scene, hw, opts)?;
             (a, p, r.into_iter().collect(), r_dof)
         }

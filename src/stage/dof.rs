@@ -1017,25 +1017,7 @@ pub fn weber_linear(
 ) -> crate::compare::WeberCompare {
     let (lo, hi) = (d.b_min(), d.b_max);
     let lum = |v: f64| lo + (hi - lo) * (v / white).clamp(0.0, 1.0);
-    let mut w = crate::compare::WeberCompare {
-        delta: d.weber,
-        ..Default::default()
-    };
-    let mut sum = 0.0;
-    for (&x, &y) in a.iter().zip(b) {
-        let (bx, by) = (lum(x), lum(y));
-        let f = (bx - by).abs() / by;
-        sum += f;
-        w.max = w.max.max(f);
-        if f > d.weber {
-            w.over_delta += 1;
-        }
-    }
-    if !a.is_empty() {
-        w.mean = sum / a.len() as f64;
-        w.over_delta_fraction = w.over_delta as f64 / a.len() as f64;
-    }
-    w
+    crate::compare::weber_of(a.iter().zip(b).map(|(&x, &y)| (lum(x), lum(y))), d.weber)
 }
 
 /// Runs the dof stage inside the pipeline: replaces the frame codes and the float frame with
