@@ -84,6 +84,13 @@ impl DisplayModel {
     pub fn luminance(&self, code: u16) -> f64 {
         self.b_min + (self.b_max - self.b_min) * (code as f64 / self.max_code).powf(self.gamma)
     }
+
+    /// [`DisplayModel::luminance`] of every DAC code, indexed by code.
+    pub fn luminance_table(&self) -> Vec<f64> {
+        (0..=self.max_code as u32)
+            .map(|c| self.luminance(c as u16))
+            .collect()
+    }
 }
 
 /// Luminance-domain comparison.
@@ -103,9 +110,7 @@ pub struct WeberCompare {
 
 /// Compares displayed luminance.
 pub fn weber(fixed: &[u16], reference: &[u16], m: &DisplayModel) -> WeberCompare {
-    let lum: Vec<f64> = (0..=m.max_code as u32)
-        .map(|c| m.luminance(c as u16))
-        .collect();
+    let lum = m.luminance_table();
     weber_of(
         fixed
             .iter()

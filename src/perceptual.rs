@@ -57,12 +57,12 @@ pub struct Contours {
     pub map: Vec<u8>,
 }
 
-fn integral(v: &[f64], w: usize, h: usize) -> Vec<f64> {
+fn integral(v: impl Fn(usize) -> f64, w: usize, h: usize) -> Vec<f64> {
     let mut s = vec![0.0; (w + 1) * (h + 1)];
     for y in 0..h {
         let mut row = 0.0;
         for x in 0..w {
-            row += v[y * w + x];
+            row += v(y * w + x);
             s[(y + 1) * (w + 1) + x + 1] = s[y * (w + 1) + x + 1] + row;
         }
     }
@@ -76,19 +76,33 @@ fn rect(s: &[f64], w: usize, x0: usize, y0: usize, x1: usize, y1: usize) -> f64 
     s[y1 * w1 + x1] - s[y0 * w1 + x1] - s[y1 * w1 + x0] + s[y0 * w1 + x0]
 }
 
-/// Excess steps along one direction: `(smooth, excess)` per pair, indexed by the first
-/// pixel; `horizontal` pairs `(x, y)-(x+1, y)`.
+/// Sliding (minimum, maximum) of `v` over `n` elements at stride `stride`: `out[p]` covers
+/// `v[p], v[p + stride], ..., v[p + (n-1) stride]` (fewer past the end of `v`).
+fn sliding_min_max(v: &[(f64, f64)], n: usize, stride: usize) -> Vec<(f64, f64)> {
+    (0..v.len())
+        .map(|p| {
+            let mut m = (f64::MAX, f64::MIN);
+            for &(lo, hi) in v[p..].iter().step_by(stride).take(n) {
+                m = (m.0.min(lo), m.1.max(hi));
+            }
+            m
+        })
+        .collect()
+}
+
+/// Excess steps along one direction from the integral images of the two outputs' and the
+/// ideal luminance: per pair, indexed by the first pixel, the excess factor
+/// `exp(excess) >= 1` of each output (`None` where the window leaves the image or is not
+/// smooth); `horizontal` pairs `(x, y)-(x+1, y)`.
 fn excess(
-    out: &[&[f64]],
-    ideal_lum: &[f64],
-    ideal_code: &[f64],
-    w: usize,
-    h: usize,
+    so: [&[f64]; 2],
+    ideal: &IdealImage,
+    max_code: f64,
     horizontal: bool,
-) -> Vec<Vec<Option<f64>>> {
-    let si = integral(ideal_lum, w, h);
-    let so: Vec<Vec<f64>> = out.iter().map(|o| integral(o, w, h)).collect();
+) -> Vec<[Option<f64>; 2]> {
     let (l, hw) = (SIDE, HALF_WIDTH);
+    let (w, h) = (ideal.width, ideal.height);
+    let (si, span) = (&ideal.lum_integral, &ideal.span[usize::from(!horizontal)]);
     (0..h * w)
         .into_par_iter()
         .map(|p| {
@@ -100,7 +114,7 @@ fn excess(
                 (y, x, h, w)
             };
             if a + 1 < l || a + l >= na || b < hw || b + hw >= nb {
-                return vec![None; out.len()];
+                return [None; 2];
             }
             let (a0, a1, a2) = (a + 1 - l, a + 1, a + 1 + l);
             let (b0, b1) = (b - hw, b + hw + 1);
@@ -112,53 +126,75 @@ fn excess(
                 }
             };
             let (ra, rb) = (r(a0, a1), r(a1, a2));
-            // Smoothness of the ideal signal over the whole window.
-            let (mut lo, mut hi) = (f64::MAX, f64::MIN);
-            for aa in a0..a2 {
-                for bb in b0..b1 {
-                    let q = if horizontal { bb * w + aa } else { aa * w + bb };
-                    lo = lo.min(ideal_code[q]);
-                    hi = hi.max(ideal_code[q]);
-                }
+            // Smoothness of the ideal signal over the whole window, in DAC codes (scaling
+            // commutes with min and max: this is the span of the ideal codes themselves).
+            let (lo, hi) = span[ra.1 * w + ra.0];
+            if hi * max_code - lo * max_code > SMOOTH_CODES {
+                return [None; 2];
             }
-            if hi - lo > SMOOTH_CODES {
-                return vec![None; out.len()];
-            }
-            let ideal =
-                (rect(&si, w, ra.0, ra.1, ra.2, ra.3) / rect(&si, w, rb.0, rb.1, rb.2, rb.3)).ln();
-            so.iter()
-                .map(|s| {
-                    let o = (rect(s, w, ra.0, ra.1, ra.2, ra.3)
-                        / rect(s, w, rb.0, rb.1, rb.2, rb.3))
-                    .ln();
-                    Some((o - ideal).abs())
-                })
-                .collect()
+            // |ln(A_out / B_out) - ln(A_ideal / B_ideal)| = ln(max(q, 1/q)) with q the ratio
+            // of the two ratios; kept as max(q, 1/q) (ln is monotone), so one division per
+            // output instead of two logarithms; the caller compares with exp(threshold).
+            let ideal = rect(si, w, ra.0, ra.1, ra.2, ra.3) / rect(si, w, rb.0, rb.1, rb.2, rb.3);
+            so.map(|s| {
+                let o = rect(s, w, ra.0, ra.1, ra.2, ra.3) / rect(s, w, rb.0, rb.1, rb.2, rb.3);
+                let q = o / ideal;
+                Some(q.max(1.0 / q))
+            })
         })
         .collect()
 }
 
-/// Measures visible contours of `dac` (and of `dac_ref`) against the ideal DAC values
-/// `ideal` (real, DAC units) on a `width x height` image.
+/// What the contour metric needs of the ideal (float reference, unquantised) image, none of
+/// it depending on the DAC width: the integral image of its displayed luminance and, per
+/// direction, the span (min, max) of its normalised value over every window. Built once per
+/// gamma exponent and shared by every DAC width and dither of a sweep.
+pub struct IdealImage {
+    width: usize,
+    height: usize,
+    lum_integral: Vec<f64>,
+    span: [Vec<(f64, f64)>; 2],
+}
+
+impl IdealImage {
+    /// From the ideal values normalised to [0, 1] of full scale (`powers`: the float
+    /// frame through the gamma curve, before the DAC scale) on a `width x height` image.
+    pub fn new(powers: &[f64], display: &DisplayModel, width: u32, height: u32) -> Self {
+        let (w, h) = (width as usize, height as usize);
+        let lum_integral = integral(
+            |i| display.b_min + (display.b_max - display.b_min) * powers[i].powf(display.gamma),
+            w,
+            h,
+        );
+        // The span over every 2L x (2W+1) window, separably: along the step, then across
+        // it. `span[d][q]` covers the window whose first corner (smallest x, y) is q.
+        let pairs: Vec<(f64, f64)> = powers.iter().map(|&v| (v, v)).collect();
+        let (l, hw) = (SIDE, HALF_WIDTH);
+        let span = [(1, w), (w, 1)].map(|(along, across)| {
+            sliding_min_max(&sliding_min_max(&pairs, 2 * l, along), 2 * hw + 1, across)
+        });
+        Self {
+            width: w,
+            height: h,
+            lum_integral,
+            span,
+        }
+    }
+}
+
+/// Measures visible contours of `dac` (and of `dac_ref`) against the ideal image.
 pub fn contours(
     dac: &[u16],
     dac_ref: &[u16],
-    ideal: &[f64],
+    ideal: &IdealImage,
     display: &DisplayModel,
-    width: u32,
-    height: u32,
 ) -> Contours {
-    let (w, h) = (width as usize, height as usize);
-    let lum_of = |c: &[u16]| -> Vec<f64> { c.iter().map(|&c| display.luminance(c)).collect() };
-    let (lf, lr) = (lum_of(dac), lum_of(dac_ref));
-    let li: Vec<f64> = ideal
-        .iter()
-        .map(|&v| {
-            let n = (v / display.max_code).clamp(0.0, 1.0);
-            display.b_min + (display.b_max - display.b_min) * n.powf(display.gamma)
-        })
-        .collect();
-    let thr = (1.0 + display.weber).ln();
+    let (w, h) = (ideal.width, ideal.height);
+    let table = display.luminance_table();
+    let sf = integral(|i| table[dac[i] as usize], w, h);
+    let sr = integral(|i| table[dac_ref[i] as usize], w, h);
+    // Excess steps are kept as luminance-ratio factors >= 1 (see `excess`).
+    let thr = 1.0 + display.weber;
     let mut rep = ContourReport {
         delta: display.weber,
         window: [SIDE, 2 * HALF_WIDTH + 1],
@@ -167,7 +203,7 @@ pub fn contours(
     };
     let mut map = vec![0u8; w * h];
     for horizontal in [true, false] {
-        let ex = excess(&[&lf, &lr], &li, ideal, w, h, horizontal);
+        let ex = excess([&sf, &sr], ideal, display.max_code, horizontal);
         let step = if horizontal { 1 } else { w };
         let get = |p: Option<usize>, k: usize| p.and_then(|p| ex.get(p)).and_then(|v| v[k]);
         for p in 0..w * h {
@@ -179,7 +215,7 @@ pub fn contours(
             let prev = p.checked_sub(step);
             let next = Some(p + step);
             for (k, e) in ex[p].iter().enumerate() {
-                let e = e.unwrap_or(0.0);
+                let e = e.unwrap_or(1.0);
                 if e > thr
                     && get(prev, k).is_none_or(|v| e >= v)
                     && get(next, k).is_none_or(|v| e > v)

@@ -703,7 +703,14 @@ pub struct Post {
 }
 
 /// Runs phase 4: the gamma LUT to the DAC, fixed and float.
-pub fn post(a: &Accumulated, scene: &Scene, hw: &HwConfig, opts: RenderOptions) -> Result<Post> {
+/// `powers` are the float frame's [`GammaSpec::power`]s ([`Reference::powers`]).
+pub fn post(
+    a: &Accumulated,
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RenderOptions,
+    powers: &[f64],
+) -> Result<Post> {
     let frame_fmt = hw.accumulate.frame.format;
     let gamma_value = hw.gamma.gamma.unwrap_or(scene.display.gamma);
     let spec = GammaSpec::new(
@@ -722,6 +729,7 @@ pub fn post(a: &Accumulated, scene: &Scene, hw: &HwConfig, opts: RenderOptions) 
             &spec,
             &hw.dither,
             opts.stage_local,
+            powers,
         );
         return Ok(Post {
             dac: d.dac,
@@ -761,8 +769,7 @@ pub fn post(a: &Accumulated, scene: &Scene, hw: &HwConfig, opts: RenderOptions) 
     }
     let t = Instant::now();
     let mut dac_ref = vec![0u16; a.frame_ref.len()];
-    let white_lsb = white as f64 * (1u64 << frame_fmt.frac_bits) as f64;
-    gamma::apply_f64(&spec, &a.frame_ref, white_lsb, &mut dac_ref);
+    gamma::apply_powers(&spec, powers, &mut dac_ref);
     r.float_ms = ms_since(t);
     Ok(Post {
         dac,
@@ -807,6 +814,133 @@ pub fn render_ext(
     render_cached(scene, hw, opts, dof_reference, None)
 }
 
+/// Everything a render computes before the gamma/dither post stage: the phases up to the
+/// frame memory, the frame-memory and sample-buffer pack checks, the cycle model's workload
+/// and its simulation. None of it depends on the `gamma` or `dither` sections, so sweeps
+/// share one `Early` between configurations that differ only there
+/// ([`crate::sweep::cache`]).
+pub struct Early {
+    /// Phase 1.
+    pub front: Front,
+    /// Phase 2.
+    pub geometry: Geometry,
+    /// Phase 3 (after depth of field for a thin lens).
+    pub acc: Accumulated,
+    /// The `logdomain` stage report (log codings).
+    pub log_stage: Option<StageReport>,
+    /// The log frame's adder (log-add coding: the post stage reads a log-coded frame).
+    pub log_adder: Option<logdomain::LogAdder>,
+    /// The depth-of-field stage report (thin lens).
+    pub dof: Option<StageReport>,
+    /// Pack checks of the frame memory and of the sample buffer.
+    pub packs: [crate::cycles::cost::PackCheck; 2],
+    /// The cycle model's token streams.
+    pub workload: crate::cycles::Workload,
+    /// The cycle simulation of `workload` and its wall time (s).
+    pub sim: (crate::cycles::SimResult, f64),
+    /// [`Early::reference`] computed so far, by exponent bits.
+    references: std::sync::Mutex<Vec<(u64, std::sync::Arc<Reference>)>>,
+}
+
+/// The DAC-independent part of the float reference after the gamma curve, for one gamma
+/// exponent: what every DAC width and dither of a sweep shares.
+pub struct Reference {
+    /// `clamp(frame_ref / white, 0, 1)^exponent` per pixel ([`GammaSpec::power`]): the float
+    /// reference's gamma before the DAC scale.
+    pub powers: Vec<f64>,
+    /// The ideal image as the contour metric reads it.
+    pub ideal: crate::perceptual::IdealImage,
+}
+
+impl Early {
+    /// The [`Reference`] for `spec`'s exponent, computed on first use and kept.
+    pub fn reference(
+        &self,
+        scene: &Scene,
+        hw: &HwConfig,
+        spec: &GammaSpec,
+    ) -> std::sync::Arc<Reference> {
+        use rayon::prelude::*;
+        let key = spec.exponent.to_bits();
+        let mut memo = self.references.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, r)) = memo.iter().find(|(k, _)| *k == key) {
+            return r.clone();
+        }
+        let ff = hw.accumulate.frame.format;
+        let white_lsb = (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64;
+        let powers: Vec<f64> = self
+            .acc
+            .frame_ref
+            .par_iter()
+            .map(|&v| spec.power(v / white_lsb))
+            .collect();
+        let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
+        let ideal = crate::perceptual::IdealImage::new(
+            &powers,
+            &display,
+            scene.image.width,
+            scene.image.height,
+        );
+        let r = std::sync::Arc::new(Reference { powers, ideal });
+        memo.push((key, r.clone()));
+        r
+    }
+}
+
+/// Runs everything before the post stage (see [`Early`]).
+pub fn early_phases(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RenderOptions,
+    dof_reference: bool,
+) -> Result<Early> {
+    let mut f = front(scene, hw)?;
+    let mut g = geometry(&f, hw, opts)?;
+    // Log coding: the `logdomain` stage (encoder; potentiation LUT or log accumulation).
+    let log_stage = if hw.coding.kind != CodingKind::Linear {
+        Some(logdomain::encode_phase(&mut f, &mut g, scene, hw)?)
+    } else {
+        None
+    };
+    let (a, log_stage, dof, log_adder) = match (hw.coding.kind == CodingKind::LogAdd, log_stage) {
+        (true, Some(mut r)) => {
+            let (a, add) = logdomain::accumulate_phase(&f, &g, scene, hw, &mut r, opts)?;
+            (a, Some(r), None, Some(add))
+        }
+        (_, r) => {
+            let (a, r_dof) = accumulate_and_dof(&f, &g, scene, hw, opts, dof_reference)?;
+            (a, r, r_dof, None)
+        }
+    };
+    let workload = crate::cycles::Workload::new(
+        g.prim_work.clone(),
+        &a.tiles,
+        &f.region,
+        f.kernel.size,
+        &a.tile_rmw,
+        hw.accumulate.frame.format.total_bits(),
+    );
+    let t = Instant::now();
+    let sim = crate::cycles::simulate(&workload, &hw.cycles, None);
+    let sim_wall = t.elapsed().as_secs_f64();
+    let packs = [
+        pack_frame_memory(&a.frame, hw),
+        pack_sample_buffer(f.qprims.len(), &g.samples, hw),
+    ];
+    Ok(Early {
+        front: f,
+        geometry: g,
+        acc: a,
+        log_stage,
+        log_adder,
+        dof,
+        packs,
+        workload,
+        sim: (sim, sim_wall),
+        references: Default::default(),
+    })
+}
+
 /// [`render_ext`] reusing the phases up to the frame memory (front, geometry, accumulate,
 /// depth of field) from `cache` when only late-only fields (gamma, dither) changed; used by
 /// sweeps (see [`crate::sweep::cache`]). The result is identical to an uncached render.
@@ -831,76 +965,43 @@ pub fn render_cached(
         }
         .into());
     }
-    let cached = match cache {
+    let early = match cache {
         Some(c) if hw.coding.kind == CodingKind::Linear => {
-            Some(c.early(scene, hw, opts, dof_reference, || {
-                let f = front(scene, hw)?;
-                let g = geometry(&f, hw, opts)?;
-                let (a, r_dof) = accumulate_and_dof(&f, &g, scene, hw, opts, dof_reference)?;
-                let sp = pack_sample_buffer(f.qprims.len(), &g.samples, hw);
-                Ok((f, g, a, r_dof, sp))
-            })?)
+            c.early(scene, hw, opts, dof_reference, || {
+                early_phases(scene, hw, opts, dof_reference)
+            })?
         }
-        _ => None,
+        _ => std::sync::Arc::new(early_phases(scene, hw, opts, dof_reference)?),
     };
-    let (mut f, mut g, mut early_a, mut early_sample_pack) = match cached {
-        Some((f, g, a, r_dof, sp)) => (f, g, Some((a, r_dof)), Some(sp)),
-        None => {
-            let f = front(scene, hw)?;
-            let g = geometry(&f, hw, opts)?;
-            (f, g, None, None)
-        }
-    };
-    // Log coding: the `logdomain` stage (encoder; potentiation LUT or log accumulation).
-    let log_stage = if hw.coding.kind != CodingKind::Linear {
-        Some(logdomain::encode_phase(&mut f, &mut g, scene, hw)?)
-    } else {
-        None
-    };
-    let (a, p, log_stage, r_dof) = match (log_add, log_stage) {
-        (true, Some(mut r)) => {
-            let (a, add) = logdomain::accumulate_phase(&f, &g, scene, hw, &mut r, opts)?;
-            let p = logdomain::post(&a, &add, scene, hw, opts);
-            (a, p, vec![r], None)
-        }
-        (_, r) if early_a.is_some() => {
-            let (a, r_dof) = early_a.take().expect("checked");
-            let p = post(&a, scene, hw, opts)?;
-            (a, p, r.into_iter().collect(), r_dof)
-        }
-        (_, r) => {
-            let (a, r_dof) = accumulate_and_dof(&f, &g, scene, hw, opts, dof_reference)?;
-            let p = post(&a, scene, hw, opts)?;
-            (a, p, r.into_iter().collect(), r_dof)
-        }
+    let Early {
+        front: f,
+        geometry: g,
+        acc: a,
+        ..
+    } = &*early;
+    let spec = GammaSpec::new(
+        hw.gamma.gamma.unwrap_or(scene.display.gamma),
+        hw.gamma.correction,
+        hw.gamma.dac_bits,
+        hw.gamma.quant,
+    );
+    let reference = early.reference(scene, hw, &spec);
+    let p = match &early.log_adder {
+        Some(add) => logdomain::post(a, add, scene, hw, opts),
+        None => post(a, scene, hw, opts, &reference.powers)?,
     };
     let (width, height) = (scene.image.width, scene.image.height);
     let codes = compare::codes(&p.dac, &p.dac_ref, hw.gamma.dac_bits);
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let weber = compare::weber(&p.dac, &p.dac_ref, &display);
-    let contours = {
-        let ff = hw.accumulate.frame.format;
-        let white_lsb = (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64;
-        let spec = GammaSpec::new(
-            hw.gamma.gamma.unwrap_or(scene.display.gamma),
-            hw.gamma.correction,
-            hw.gamma.dac_bits,
-            hw.gamma.quant,
-        );
-        let ideal: Vec<f64> = a
-            .frame_ref
-            .iter()
-            .map(|&v| spec.ideal(v / white_lsb))
-            .collect();
-        crate::perceptual::contours(&p.dac, &p.dac_ref, &ideal, &display, width, height)
-    };
-    let [r_setup, r_raster, r_vis] = g.reports;
-    let mut stages = vec![f.input, r_setup, r_raster, r_vis];
-    stages.extend(log_stage);
-    if !log_add {
-        stages.push(a.report);
+    let contours = crate::perceptual::contours(&p.dac, &p.dac_ref, &reference.ideal, &display);
+    let mut stages = vec![f.input.clone()];
+    stages.extend(g.reports.iter().cloned());
+    stages.extend(early.log_stage.clone());
+    if early.log_adder.is_none() {
+        stages.push(a.report.clone());
     }
-    stages.extend(r_dof);
+    stages.extend(early.dof.clone());
     stages.extend(p.reports);
     let overflows = stages
         .iter()
@@ -909,30 +1010,18 @@ pub fn render_cached(
         .sum();
     let storage_bits = stages.iter().map(|s| s.cost.storage_bits).sum();
     let lut_bits = stages.iter().map(|s| s.cost.lut_bits).sum();
-    let workload = crate::cycles::Workload::new(
-        g.prim_work,
-        &a.tiles,
-        &f.region,
-        f.kernel.size,
-        &a.tile_rmw,
-        hw.accumulate.frame.format.total_bits(),
-    );
-    let packed = pack_checks(
-        f.qprims.len(),
-        &g.samples,
-        &a.frame,
-        scene,
-        hw,
-        early_sample_pack.take(),
-    );
+    let [frame_pack, sample_pack] = early.packs.clone();
+    let packed = vec![frame_pack, gamma_rom_pack(scene, hw), sample_pack];
     let planned: Vec<String> = stages.iter().map(|s| s.name.clone()).collect();
-    let cycles = crate::cycles::report(
-        &workload,
+    let (sim, sim_wall) = &early.sim;
+    let cycles = crate::cycles::report_simulated(
+        &early.workload,
         &hw.cycles,
         &planned,
         scene.display.refresh_hz,
         crate::cycles::cost::summarize(&stages, packed),
-        None,
+        sim,
+        *sim_wall,
     );
     let timing = Timing {
         host_ms: f.host_ms,
@@ -969,34 +1058,29 @@ pub fn render_cached(
         report,
         dac: p.dac,
         dac_ref: p.dac_ref,
-        frame: a.frame,
-        frame_ref: a.frame_ref,
+        frame: a.frame.clone(),
+        frame_ref: a.frame_ref.clone(),
         dac_bits: hw.gamma.dac_bits,
-        workload,
+        workload: early.workload.clone(),
         contour_map: contours.map,
     })
 }
 
-/// Packs the frame memory, the gamma ROM and the modelled region of the sample buffer with
-/// `bitvec` at their computed sizes and reads them back. An empty sample slot ("nothing",
-/// `u32::MAX` in the model) is stored as the far code (all ones) with the background id.
-fn pack_checks(
-    prims: usize,
-    s: &Samples,
-    frame: &Frame,
-    scene: &Scene,
-    hw: &HwConfig,
-    sample_pack: Option<crate::cycles::cost::PackCheck>,
-) -> Vec<crate::cycles::cost::PackCheck> {
-    use crate::cycles::cost::pack;
+/// Packs the frame memory with `bitvec` at its computed size and reads it back (the gamma
+/// ROM and the sample buffer have their own checks below).
+fn pack_frame_memory(frame: &Frame, hw: &HwConfig) -> crate::cycles::cost::PackCheck {
     let fb = hw.accumulate.frame.format.total_bits();
-    let mut out = vec![pack(
+    crate::cycles::cost::pack(
         "frame memory",
         frame.acc.len(),
         &[fb],
         frame.acc.len() as u64 * fb as u64,
         |r, _| frame.acc[r] as u64,
-    )];
+    )
+}
+
+/// Packs the gamma ROM at its computed size and reads it back.
+fn gamma_rom_pack(scene: &Scene, hw: &HwConfig) -> crate::cycles::cost::PackCheck {
     let spec = GammaSpec::new(
         hw.gamma.gamma.unwrap_or(scene.display.gamma),
         hw.gamma.correction,
@@ -1004,23 +1088,19 @@ fn pack_checks(
         hw.gamma.quant,
     );
     let lut = GammaLut::build(&spec, hw.accumulate.frame.format.int_bits);
-    out.push(pack(
+    crate::cycles::cost::pack(
         "gamma ROM",
         lut.table.len(),
         &[hw.gamma.dac_bits],
         lut.cost().lut_bits,
         |r, _| lut.table[r] as u64,
-    ));
-    out.push(sample_pack.unwrap_or_else(|| pack_sample_buffer(prims, s, hw)));
-    out
+    )
 }
 
-/// The sample-buffer pack check (depends only on the early phases: cached by sweeps).
-pub fn pack_sample_buffer(
-    prims: usize,
-    s: &Samples,
-    hw: &HwConfig,
-) -> crate::cycles::cost::PackCheck {
+/// Packs the modelled region of the sample buffer at its computed size and reads it back.
+/// An empty sample slot ("nothing", `u32::MAX` in the model) is stored as the far code (all
+/// ones) with the background id.
+fn pack_sample_buffer(prims: usize, s: &Samples, hw: &HwConfig) -> crate::cycles::cost::PackCheck {
     use crate::cycles::cost::pack;
     let zb = hw.visibility.z.format.total_bits();
     let ib = hw.input.intensity.format.total_bits();

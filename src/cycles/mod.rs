@@ -850,6 +850,20 @@ pub fn report(
     let t = Instant::now();
     let r = simulate(w, c, trace);
     let wall = t.elapsed().as_secs_f64();
+    report_simulated(w, c, planned, refresh_hz, cost, &r, wall)
+}
+
+/// [`report`] of a simulation already run (`wall`: its wall time, seconds); sweeps reuse one
+/// simulation for every configuration that shares the workload and the timings.
+pub fn report_simulated(
+    w: &Workload,
+    c: &CyclesCfg,
+    planned: &[String],
+    refresh_hz: f64,
+    cost: cost::CostSummary,
+    r: &SimResult,
+    wall: f64,
+) -> CycleReport {
     let (lo, hi) = r.bounds();
     CycleReport {
         plan: CyclePlan {
@@ -872,7 +886,7 @@ pub fn report(
         bounds_hold: lo <= r.total_cycles && r.total_cycles <= hi,
         frame_port_bound_cycles: r.frame_port_bound_cycles,
         throughput: Throughput::new(r.total_cycles, c.clock_mhz, w.screen_pixels, refresh_hz),
-        stages: r.stages,
+        stages: r.stages.clone(),
         sim: SimSpeed {
             wall_ms: wall * 1e3,
             cycles_per_s: if wall > 0.0 {

@@ -43,7 +43,6 @@ use crate::fixed::{Overflow, QFormat, Quant, Quantizer, SignalStats, round_shift
 use crate::stage::gamma::{GammaLut, GammaSpec};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// Dither kinds.
@@ -631,15 +630,15 @@ pub struct PeriodMean {
 }
 
 /// Runs the fixed dither on a static frame for every frame of the period and compares each
-/// pixel's mean with its input. Pixels with the same (mask phase, input) share one run.
-pub fn period_mean(d: &Dither, x: &[u32], width: u32, s: u32, omax: u32) -> Option<PeriodMean> {
+/// pixel's mean with its input. Over one period the offsets visit every mask position once,
+/// so every pixel sees every rank once whatever its position: the period sum depends on the
+/// input value alone, and pixels with the same input share one run.
+pub fn period_mean(d: &Dither, x: &[u32], s: u32, omax: u32) -> Option<PeriodMean> {
     let m = d.mask.as_ref()?;
     if !d.cfg.temporal {
         return None;
     }
     let period = m.period();
-    let w = width.max(1);
-    let mut memo: BTreeMap<(u32, u32, u32), u64> = BTreeMap::new();
     let mut res = PeriodMean {
         period,
         pixels: x.len() as u64,
@@ -647,21 +646,23 @@ pub fn period_mean(d: &Dither, x: &[u32], width: u32, s: u32, omax: u32) -> Opti
         max_abs_error: 0.0,
         exact: true,
     };
-    let offs: Vec<(u32, u32)> = (0..period).map(|t| m.offset(t)).collect();
-    let mk = m.n - 1;
-    for (i, &v) in x.iter().enumerate() {
-        let (px, py) = (i as u32 % w, i as u32 / w);
-        let sum = *memo.entry((px & mk, py & mk, v)).or_insert_with(|| {
-            offs.iter()
-                .map(|&o| ordered_code(v, s, m.at(px, py, o), m.bits).min(omax as u64))
-                .sum()
-        });
+    // One run per distinct input: frame t puts rank t on the pixel (the offset of frame t is
+    // the position of rank t, and a shifted mask is a permutation of the ranks).
+    let vmax = x.iter().copied().max().unwrap_or(0) as usize;
+    let mut memo = vec![u64::MAX; vmax + 1];
+    for &v in x {
+        let sum = &mut memo[v as usize];
+        if *sum == u64::MAX {
+            *sum = (0..period)
+                .map(|r| ordered_code(v, s, r, m.bits).min(omax as u64))
+                .sum();
+        }
         // Exact comparison: sum * 2^s == v * period.
-        if (sum << s) == v as u64 * period as u64 {
+        if (*sum << s) == v as u64 * period as u64 {
             res.exact_pixels += 1;
         } else {
             res.exact = false;
-            let e = (sum as f64 / period as f64 - v as f64 / (1u64 << s) as f64).abs();
+            let e = (*sum as f64 / period as f64 - v as f64 / (1u64 << s) as f64).abs();
             res.max_abs_error = res.max_abs_error.max(e);
         }
     }
@@ -704,7 +705,8 @@ pub struct DitheredPost {
 
 /// The post phase with a dither: gamma LUT and dither, fixed and float, in the configured
 /// order. `acc` are frame codes with `frame_frac` fraction bits and `acc_bits` integer bits,
-/// `frame_ref` the float frame in frame LSBs.
+/// `frame_ref` the float frame in frame LSBs, `powers` its [`GammaSpec::power`]s
+/// (`spec.power(frame_ref[i] / white)`, computed once per exponent by the caller).
 #[allow(clippy::too_many_arguments)]
 pub fn post(
     acc: &[u32],
@@ -715,6 +717,7 @@ pub fn post(
     spec: &GammaSpec,
     cfg: &DitherCfg,
     stage_local: bool,
+    powers: &[f64],
 ) -> DitheredPost {
     let (width, height) = size;
     let d = Dither::new(cfg);
@@ -722,7 +725,6 @@ pub fn post(
     let dac_bits = spec.dac.format.int_bits;
     let dac_max = spec.dac.format.max_code() as u32;
     let white = (1u64 << acc_bits) - 1;
-    let white_lsb = white as f64 * (1u64 << frame_frac) as f64;
     let mut rg = StageReport {
         name: "gamma".into(),
         ..Default::default()
@@ -817,7 +819,7 @@ pub fn post(
         }
         rd.local = Some(e.finish());
     }
-    if let Some(pm) = period_mean(&d, &din, width, s, omax) {
+    if let Some(pm) = period_mean(&d, &din, s, omax) {
         rd.notes.insert(
             "temporal_period_mean".into(),
             serde_json::to_value(pm).unwrap_or_default(),
@@ -827,10 +829,7 @@ pub fn post(
     let t = Instant::now();
     let dac_ref: Vec<u16> = match cfg.placement {
         Placement::AfterLut => {
-            let v: Vec<f64> = frame_ref
-                .par_iter()
-                .map(|&a| spec.ideal(a / white_lsb))
-                .collect();
+            let v: Vec<f64> = powers.par_iter().map(|&p| spec.scale(p)).collect();
             d.apply_f64(&v, width, height, dac_max)
                 .into_iter()
                 .map(|c| c as u16)

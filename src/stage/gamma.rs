@@ -40,8 +40,19 @@ impl GammaSpec {
     /// The ideal DAC value (before rounding) of a normalised intensity in [0, 1].
     #[inline]
     pub fn ideal(&self, v: f64) -> f64 {
-        let v = v.clamp(0.0, 1.0);
-        v.powf(self.exponent) * self.dac.format.max_code() as f64
+        self.scale(self.power(v))
+    }
+
+    /// The DAC-independent part of [`GammaSpec::ideal`]: `clamp(v, 0, 1)^exponent`.
+    #[inline]
+    pub fn power(&self, v: f64) -> f64 {
+        v.clamp(0.0, 1.0).powf(self.exponent)
+    }
+
+    /// The DAC-dependent part of [`GammaSpec::ideal`]: a [`GammaSpec::power`] in DAC codes.
+    #[inline]
+    pub fn scale(&self, p: f64) -> f64 {
+        p * self.dac.format.max_code() as f64
     }
 
     /// The DAC code of a normalised intensity (the float reference's only rounding).
@@ -106,4 +117,13 @@ pub fn apply_f64(spec: &GammaSpec, acc: &[f64], white_lsb: f64, out: &mut [u16])
     out.par_iter_mut()
         .zip(acc.par_iter())
         .for_each(|(o, &a)| *o = spec.code(a / white_lsb));
+}
+
+/// The float reference from precomputed [`GammaSpec::power`]s (`powers[i]` =
+/// `spec.power(acc[i] / white_lsb)`): the same codes as [`apply_f64`], without the `powf`
+/// per pixel when several DAC widths share one exponent.
+pub fn apply_powers(spec: &GammaSpec, powers: &[f64], out: &mut [u16]) {
+    out.par_iter_mut()
+        .zip(powers.par_iter())
+        .for_each(|(o, &p)| *o = spec.dac.quantize_f64(spec.scale(p)).code as u16);
 }

@@ -1,33 +1,25 @@
-//! Stage reuse in sweeps: the phases up to the frame memory (front, geometry, accumulate,
-//! depth of field) are cached by a hash of everything they may depend on: the scene, the
-//! render options and the whole hardware configuration except the late-only sections
-//! `gamma` and `dither` (and the configuration's name). A sweep over gamma and dither widths
-//! therefore runs the early phases once and only `post` (LUT, dither, comparison) per
-//! configuration. The key is deliberately conservative: `cycles` stays in it because the
-//! accumulate phase plans its tiles with `cycles.tile`.
+//! Stage reuse in sweeps: everything before the post stage ([`Early`]: front, geometry,
+//! accumulate, depth of field, the frame-memory and sample-buffer pack checks, the cycle
+//! model's workload and simulation) is cached by a hash of everything it may depend on: the
+//! scene, the render options and the whole hardware configuration except the late-only
+//! sections `gamma` and `dither` (and the configuration's name). A sweep over gamma and
+//! dither widths therefore runs the early phases once and only `post` (LUT, dither,
+//! comparison) per configuration. The key is deliberately conservative: `cycles` stays in
+//! it (the accumulate phase plans its tiles with `cycles.tile`; the simulation uses the
+//! timings).
 //!
 //! The cache keeps the [`CAPACITY`] most recently inserted entries (each holds a frame and
-//! a sample buffer). A hit hands out a clone, so results are identical to an uncached render.
+//! a sample buffer), shared read-only: a render borrows them, so results are identical to
+//! an uncached render.
 
 use crate::error::Result;
 use crate::hw::HwConfig;
-use crate::pipeline::{Accumulated, Front, Geometry, RenderOptions};
+use crate::pipeline::{Early, RenderOptions};
 use crate::scene::Scene;
-use crate::stage::StageReport;
 use std::sync::{Arc, Mutex};
 
 /// Entries kept.
 pub const CAPACITY: usize = 4;
-
-/// What the early phases produce: front, geometry, frame memory (after depth of field),
-/// the depth-of-field report, and the sample-buffer pack check of the cost model.
-pub type Early = (
-    Front,
-    Geometry,
-    Accumulated,
-    Option<StageReport>,
-    crate::cycles::cost::PackCheck,
-);
 
 /// The cache (shared between threads).
 #[derive(Default)]
@@ -69,7 +61,7 @@ impl PhaseCache {
         opts: RenderOptions,
         dof_reference: bool,
         run: impl FnOnce() -> Result<Early>,
-    ) -> Result<Early> {
+    ) -> Result<Arc<Early>> {
         use std::sync::atomic::Ordering::Relaxed;
         let key = early_key(scene, hw, opts, dof_reference);
         let found = {
@@ -78,16 +70,16 @@ impl PhaseCache {
         };
         if let Some(v) = found {
             self.hits.fetch_add(1, Relaxed);
-            return Ok((*v).clone());
+            return Ok(v);
         }
         self.misses.fetch_add(1, Relaxed);
-        let v = run()?;
+        let v = Arc::new(run()?);
         let mut e = self.entries.lock().unwrap_or_else(|e| e.into_inner());
         if !e.iter().any(|(k, _)| *k == key) {
             if e.len() >= CAPACITY {
                 e.remove(0);
             }
-            e.push((key, Arc::new(v.clone())));
+            e.push((key, v.clone()));
         }
         Ok(v)
     }
