@@ -76,15 +76,18 @@ struct SweepArgs {
     /// Configurations rendered in parallel (1 = serial; results are identical).
     #[arg(long, default_value_t = 1)]
     jobs: usize,
-    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput.
+    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker).
     #[arg(long, default_value = "error,cost")]
     axes: String,
     /// Run every phase for every configuration (no stage reuse between configurations).
     #[arg(long)]
     no_reuse: bool,
-    /// Write an SVG of error vs cost and error vs throughput with the Pareto fronts.
-    #[arg(long, value_name = "PARETO.svg")]
+    /// Plot error vs cost and error vs throughput with the Pareto fronts (SVG or PNG, by extension).
+    #[arg(long, value_name = "PARETO.svg|png")]
     plot: Option<String>,
+    /// Add small-object flicker metrics to every row: the flicker scene swept over PHASES x PHASES sub-pixel phases (1..=64; `igemu flicker` uses 32).
+    #[arg(long, value_name = "PHASES")]
+    flicker: Option<u32>,
 }
 
 #[derive(Args)]
@@ -1011,12 +1014,21 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
         ));
     }
     let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
-    if let Some(p) = &a.plot
-        && !p.ends_with(".svg")
+    if let Some(p) = &a.plot {
+        sweep::plot::PlotFormat::of(p).map_err(|m| arg_error("--plot", m))?;
+    }
+    if let Some(n) = a.flicker
+        && !(1..=64).contains(&n)
     {
         return Err(arg_error(
-            "--plot",
-            format!("`{p}`: only SVG is written (give a .svg file)"),
+            "--flicker",
+            format!("phases must be in 1..=64, got {n}"),
+        ));
+    }
+    if a.flicker.is_none() && axes.contains(&pareto::Axis::Flicker) {
+        return Err(arg_error(
+            "--axes",
+            "the flicker axis needs the flicker metrics: add --flicker PHASES".into(),
         ));
     }
     let file = igemu::files::TomlFile::read(&a.grid)?;
@@ -1049,38 +1061,29 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
         shard,
         jobs: a.jobs,
         cache: if a.no_reuse { None } else { Some(&cache) },
+        flicker: a.flicker,
     };
-    // Progress with ETA on a terminal only (quiet when stderr is piped or redirected).
-    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let start = std::time::Instant::now();
-    let first = std::sync::Mutex::new(None::<usize>);
+    // Progress bar with ETA on a terminal (indicatif hides it when stderr is not a terminal).
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} rows  {elapsed} elapsed, ETA {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
     let progress = |done: usize, total: usize| {
-        if !tty {
-            return;
-        }
-        let mut f = first.lock().unwrap_or_else(|e| e.into_inner());
-        let base = *f.get_or_insert(done);
-        let secs = start.elapsed().as_secs_f64();
-        let eta = if done > base {
-            format!(
-                "{:.0} s",
-                secs / (done - base) as f64 * (total - done) as f64
-            )
+        if bar.length() != Some(total as u64) {
+            // The first call: rows kept by --resume do not count towards the rate.
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+            bar.reset_eta();
         } else {
-            "?".into()
-        };
-        let width = 30;
-        let fill = (done * width).checked_div(total).unwrap_or(width);
-        eprint!(
-            "\r[{}{}] {done}/{total}  {secs:.0} s elapsed, ETA {eta}   ",
-            "#".repeat(fill),
-            "-".repeat(width - fill)
-        );
-        if done == total {
-            eprintln!();
+            bar.set_position(done as u64);
         }
     };
-    let summary = sweep::run(&configs, &scenes, &opts, &progress)?;
+    let summary = sweep::run(&configs, &scenes, &opts, &progress);
+    bar.finish_and_clear();
+    let summary = summary?;
     eprintln!(
         "igemu sweep: {} configurations x {} scenes; this run: {} rows ({} kept from {}, {} computed) -> {}",
         configs.len(),
@@ -1093,10 +1096,7 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
     );
     let rows = &summary.rows;
     if let Some(p) = &a.plot {
-        std::fs::write(p, pareto::svg(rows, axes[0])).map_err(|source| Error::Io {
-            path: p.clone(),
-            source,
-        })?;
+        sweep::plot::write(rows, axes[0], p)?;
     }
     let front = pareto::front(rows, &axes);
     println!(

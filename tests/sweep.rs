@@ -105,6 +105,19 @@ fn bad_grids_and_shards_exit_2_before_any_work() {
         assert!(!out.exists(), "{name}: no work before the error");
     }
     let g = grid_file(&d, "ok.toml", "gamma.dac_bits = [8]\n");
+    for (flag, value) in [
+        ("--plot", "pareto.gif"),
+        ("--flicker", "0"),
+        ("--flicker", "65"),
+        ("--axes", "flicker,cost"),
+        ("--jobs", "0"),
+    ] {
+        let o = igemu(&["sweep", "--grid", &g, "--out", &out_s, flag, value]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}: {err}");
+        assert!(err.contains(flag), "{flag} {value}: {err}");
+        assert!(!out.exists());
+    }
     for shard in ["3/2", "0/2", "1/0", "x"] {
         let o = igemu(&["sweep", "--grid", &g, "--out", &out_s, "--shard", shard]);
         let err = String::from_utf8_lossy(&o.stderr);
@@ -236,15 +249,83 @@ fn pareto_front_keeps_exactly_the_non_dominated_rows() {
         let dominated = rows.iter().any(|o| pareto::dominates(o, r, &axes));
         assert_eq!(front.contains(&i), !dominated, "row {i}");
     }
-    let svg = pareto::svg(&rows, pareto::Axis::Error);
+    // The plotters plot: every row grey in both panels (+ a legend dot each), each panel's
+    // front red (its points, its line and a legend line).
+    let svg_path = d.join("p.svg").to_string_lossy().into_owned();
+    sweep::plot::write(&rows, pareto::Axis::Error, &svg_path).unwrap();
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-    assert_eq!(svg.matches("<polyline").count(), 2);
     let fc = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Cost]).len();
     let ft = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Throughput]).len();
-    assert_eq!(svg.matches("fill=\"red\"").count(), fc + ft);
-    assert_eq!(svg.matches("fill=\"#999\"").count(), 2 * rows.len());
+    assert_eq!(svg.matches("fill=\"#FF0000\"").count(), fc + ft);
+    assert_eq!(svg.matches("fill=\"#969696\"").count(), 2 * rows.len() + 2);
+    assert_eq!(
+        svg.matches("<polyline fill=\"none\" opacity=\"1\" stroke=\"#FF0000\"")
+            .count(),
+        4
+    );
+    assert!(svg.contains("mean Weber error") && svg.contains("Pareto front: "));
+    let png_path = d.join("p.png").to_string_lossy().into_owned();
+    sweep::plot::write(&rows, pareto::Axis::Error, &png_path).unwrap();
+    let png = image::open(&png_path).unwrap().to_rgb8();
+    assert_eq!(png.dimensions(), sweep::plot::SIZE);
+    assert!(
+        png.pixels().any(|p| p.0 == [255, 0, 0]),
+        "the front is drawn"
+    );
+    assert!(sweep::plot::write(&rows, pareto::Axis::Error, "p.gif").is_err());
     assert!(pareto::Axis::parse_list("error").is_err());
     assert!(pareto::Axis::parse_list("error,bogus").is_err());
+}
+
+#[test]
+fn flicker_metrics_are_the_flicker_sweeps_worst_object_and_only_when_asked() {
+    let d = tmp("flicker");
+    let scene = scene_file(&d);
+    let text = "gamma.dac_bits = [6, 10]\naccumulate.filter = [\"box\", \"tent\"]\n";
+    let g = grid_file(&d, "g.toml", text);
+    let out = d.join("o.jsonl").to_string_lossy().into_owned();
+    let o = igemu(&[
+        "sweep",
+        &scene,
+        "--grid",
+        &g,
+        "--out",
+        &out,
+        "--flicker",
+        "4",
+        "--axes",
+        "flicker,cost",
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("displayed flicker ripple %"), "{stdout}");
+    let (rows, _) = sweep::read_rows(&out).unwrap();
+    let f = TomlFile::from_text("g.toml", text);
+    let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
+    assert_eq!(rows.len(), 4);
+    for (r, c) in rows.iter().zip(&configs) {
+        let m = r.flicker.as_ref().expect("flicker metrics in the row");
+        let direct = igemu::flicker::flicker(&c.hw, 4).unwrap();
+        let worst = direct
+            .objects
+            .iter()
+            .map(|o| o.displayed_ripple_pct)
+            .fold(0.0, f64::max);
+        assert_eq!(m.phases, 4);
+        assert_eq!(m.displayed_ripple_pct, worst);
+        assert!(direct.objects.iter().any(|o| o.object == m.worst_object));
+    }
+    // The box filter flickers more than the tent filter (REFERENCE: equal-energy filtering).
+    assert!(
+        rows[0].flicker.as_ref().unwrap().displayed_ripple_pct
+            > rows[1].flicker.as_ref().unwrap().displayed_ripple_pct
+    );
+    // Without --flicker the rows have no flicker key.
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out]);
+    assert!(o.status.success());
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(!text.contains("flicker"), "{text}");
 }
 
 #[test]
@@ -269,6 +350,7 @@ fn stage_reuse_gives_the_rows_of_full_renders() {
             shard: None,
             jobs: 1,
             cache: c,
+            flicker: None,
         };
         sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).unwrap();
         outs.push(rows(&out));

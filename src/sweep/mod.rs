@@ -14,6 +14,7 @@
 pub mod cache;
 pub mod grid;
 pub mod pareto;
+pub mod plot;
 pub mod ranges;
 
 use crate::error::{Error, Result};
@@ -75,6 +76,44 @@ pub struct CycleMetrics {
     pub real_time: bool,
 }
 
+/// Small-object flicker of a row's hardware (`--flicker PHASES`; see [`crate::flicker`]):
+/// the worst object of the flicker scene swept over `phases x phases` sub-pixel phases.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct FlickerMetrics {
+    /// Sub-pixel phases per axis.
+    pub phases: u32,
+    /// Largest peak-to-peak displayed luminance of an object, % of its mean.
+    pub displayed_ripple_pct: f64,
+    /// Largest peak-pixel modulation, %.
+    pub peak_pixel_modulation_pct: f64,
+    /// Largest |brightness error| of an object split over two pixels, %.
+    pub half_pixel_brightness_error_pct: f64,
+    /// The object with the largest displayed ripple.
+    pub worst_object: String,
+}
+
+impl FlickerMetrics {
+    /// Runs the flicker sweep of `hw`.
+    pub fn of(hw: &crate::hw::HwConfig, phases: u32) -> Result<FlickerMetrics> {
+        let r = crate::flicker::flicker(hw, phases)?;
+        let max = |f: fn(&crate::flicker::ObjectFlicker) -> f64| {
+            r.objects.iter().map(f).fold(0.0, f64::max)
+        };
+        let worst = r
+            .objects
+            .iter()
+            .max_by(|a, b| a.displayed_ripple_pct.total_cmp(&b.displayed_ripple_pct))
+            .map_or(String::new(), |o| o.object.clone());
+        Ok(FlickerMetrics {
+            phases,
+            displayed_ripple_pct: max(|o| o.displayed_ripple_pct),
+            peak_pixel_modulation_pct: max(|o| o.peak_pixel_modulation_pct),
+            half_pixel_brightness_error_pct: max(|o| o.half_pixel_brightness_error_pct.abs()),
+            worst_object: worst,
+        })
+    }
+}
+
 /// Wall time of a row (the only field that differs between runs).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct RowTiming {
@@ -99,6 +138,9 @@ pub struct Row {
     pub cost: CostMetrics,
     /// Cycles and throughput.
     pub cycles: CycleMetrics,
+    /// Small-object flicker (only with `--flicker`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flicker: Option<FlickerMetrics>,
     /// Wall time (excluded when rows are compared).
     pub timing: RowTiming,
 }
@@ -133,12 +175,14 @@ pub fn jobs(configs: usize, scenes: usize) -> Vec<Job> {
         .collect()
 }
 
-/// Renders one configuration on one scene and builds its row.
+/// Renders one configuration on one scene and builds its row (with the flicker sweep at
+/// `flicker` phases when given).
 pub fn run_job(
     job: Job,
     cfg: &Config,
     scene: &Scene,
     cache: Option<&cache::PhaseCache>,
+    flicker: Option<u32>,
 ) -> Result<Row> {
     let t = std::time::Instant::now();
     let r = pipeline::render_cached(
@@ -198,6 +242,9 @@ pub fn run_job(
             bottleneck: rep.cycles.bottleneck.clone(),
             real_time: rep.cycles.throughput.real_time,
         },
+        flicker: flicker
+            .map(|n| FlickerMetrics::of(&cfg.hw, n))
+            .transpose()?,
         timing: RowTiming { render_ms },
     })
 }
@@ -263,6 +310,8 @@ pub struct SweepOptions<'a> {
     pub jobs: usize,
     /// Stage reuse between configurations (`None`: every render runs every phase).
     pub cache: Option<&'a cache::PhaseCache>,
+    /// Add the small-object flicker metrics at this many sub-pixel phases per axis.
+    pub flicker: Option<u32>,
 }
 
 /// Summary of a run.
@@ -320,7 +369,13 @@ pub fn run(
     let total = mine.len();
     progress(reused, total);
     let work = |j: &Job| -> Result<Row> {
-        let row = run_job(*j, &configs[j.config], &scenes[j.scene], opts.cache)?;
+        let row = run_job(
+            *j,
+            &configs[j.config],
+            &scenes[j.scene],
+            opts.cache,
+            opts.flicker,
+        )?;
         let mut line = serde_json::to_string(&row).expect("rows serialise");
         line.push('\n');
         {

@@ -20,16 +20,20 @@ pub enum Axis {
     Cost,
     /// Frames per second (maximised).
     Throughput,
+    /// Largest displayed ripple of a small moving object, % (minimised; needs `--flicker`).
+    Flicker,
 }
 
 /// Axis names accepted by `--axes`.
 pub const AXES: &[&str] = &[
     "error",
+    "code_error",
     "max_error",
     "weber",
     "contours",
     "cost",
     "throughput",
+    "flicker",
 ];
 
 impl Axis {
@@ -43,6 +47,7 @@ impl Axis {
             "contours" => Axis::Contours,
             "cost" => Axis::Cost,
             "throughput" | "fps" => Axis::Throughput,
+            "flicker" => Axis::Flicker,
             other => {
                 return Err(format!(
                     "unknown axis `{other}`; allowed: {}",
@@ -78,6 +83,7 @@ impl Axis {
             Axis::Contours => "contour steps",
             Axis::Cost => "storage + LUT bits",
             Axis::Throughput => "frames/s",
+            Axis::Flicker => "displayed flicker ripple %",
         }
     }
 
@@ -91,6 +97,10 @@ impl Axis {
             Axis::Contours => r.error.contour_steps as f64,
             Axis::Cost => (r.cost.storage_bits + r.cost.lut_bits) as f64,
             Axis::Throughput => -r.cycles.fps,
+            Axis::Flicker => r
+                .flicker
+                .as_ref()
+                .map_or(f64::INFINITY, |f| f.displayed_ripple_pct),
         }
     }
 
@@ -136,84 +146,4 @@ pub fn front(rows: &[Row], axes: &[Axis]) -> Vec<usize> {
             .then(rows[a].index.cmp(&rows[b].index))
     });
     out
-}
-
-/// An SVG of two panels, error against cost and error against throughput: every row grey,
-/// the Pareto front of each panel's two axes in red and joined. Written by hand (no plotting
-/// dependency); axis extremes are labelled.
-pub fn svg(rows: &[Row], error: Axis) -> String {
-    let (pw, ph, m) = (420.0, 320.0, 60.0);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
-        2.0 * (pw + m) + m,
-        ph + 2.0 * m
-    );
-    for (k, x_axis) in [Axis::Cost, Axis::Throughput].into_iter().enumerate() {
-        let ox = m + k as f64 * (pw + m);
-        let xs: Vec<f64> = rows.iter().map(|r| x_axis.value(r)).collect();
-        let ys: Vec<f64> = rows.iter().map(|r| error.value(r)).collect();
-        let range = |v: &[f64]| {
-            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            if !(lo.is_finite() && hi.is_finite()) {
-                (0.0, 1.0)
-            } else if hi > lo {
-                (lo, hi)
-            } else {
-                (lo - 0.5, hi + 0.5)
-            }
-        };
-        let ((x0, x1), (y0, y1)) = (range(&xs), range(&ys));
-        let px = |x: f64| ox + (x - x0) / (x1 - x0) * pw;
-        let py = |y: f64| m + ph - (y - y0) / (y1 - y0) * ph;
-        s += &format!(
-            "<rect x=\"{ox}\" y=\"{m}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>\n\
-             <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n\
-             <text x=\"{}\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 {} {})\">{}</text>\n\
-             <text x=\"{ox}\" y=\"{}\">{x0:.4e}</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{x1:.4e}</text>\n\
-             <text x=\"{}\" y=\"{}\" text-anchor=\"end\">{y0:.3e}</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{y1:.3e}</text>\n",
-            ox + pw / 2.0,
-            m + ph + 32.0,
-            x_axis.name(),
-            ox - 45.0,
-            m + ph / 2.0,
-            ox - 45.0,
-            m + ph / 2.0,
-            error.name(),
-            m + ph + 14.0,
-            ox + pw,
-            m + ph + 14.0,
-            ox - 3.0,
-            m + ph,
-            ox - 3.0,
-            m + 10.0,
-        );
-        for (x, y) in xs.iter().zip(&ys) {
-            s += &format!(
-                "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3\" fill=\"#999\"/>\n",
-                px(*x),
-                py(*y)
-            );
-        }
-        let mut f = front(rows, &[error, x_axis]);
-        f.sort_by(|&a, &b| xs[a].total_cmp(&xs[b]));
-        let pts: Vec<String> = f
-            .iter()
-            .map(|&i| format!("{:.1},{:.1}", px(xs[i]), py(ys[i])))
-            .collect();
-        s += &format!(
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"red\"/>\n",
-            pts.join(" ")
-        );
-        for &i in &f {
-            s += &format!(
-                "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"4\" fill=\"red\"><title>row {}</title></circle>\n",
-                px(xs[i]),
-                py(ys[i]),
-                rows[i].index
-            );
-        }
-    }
-    s += "</svg>\n";
-    s
 }

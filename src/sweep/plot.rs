@@ -1,0 +1,190 @@
+//! The Pareto plot of a sweep (`--plot F.svg` / `F.png`), drawn with `plotters`: two panels,
+//! the error axis against cost and against throughput; every row a grey dot, each scene's
+//! Pareto front on the panel's two axes a coloured line through its configurations.
+//!
+//! Text uses DejaVu Sans, embedded (the `dejavu` crate), so a PNG renders the same on a
+//! machine without system fonts.
+
+use super::Row;
+use super::pareto::{Axis, front};
+use crate::error::{Error, FileError, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// Plot size in pixels (SVG user units).
+pub const SIZE: (u32, u32) = (1100, 460);
+
+/// The image formats `--plot` writes, by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlotFormat {
+    /// `.svg`
+    Svg,
+    /// `.png`
+    Png,
+}
+
+impl PlotFormat {
+    /// The format of a path, by its extension.
+    pub fn of(path: &str) -> std::result::Result<PlotFormat, String> {
+        let lower = path.to_ascii_lowercase();
+        if lower.ends_with(".svg") {
+            Ok(PlotFormat::Svg)
+        } else if lower.ends_with(".png") {
+            Ok(PlotFormat::Png)
+        } else {
+            Err(format!(
+                "`{path}`: give a .svg or .png file (the format follows the extension)"
+            ))
+        }
+    }
+}
+
+fn plot_error(path: &str, e: impl std::fmt::Display) -> Error {
+    Error::File(FileError {
+        file: path.into(),
+        line: None,
+        col: None,
+        field: String::new(),
+        msg: format!("cannot draw the Pareto plot: {e}"),
+    })
+}
+
+/// Registers the embedded font once (plotters keeps a process-wide font table).
+fn font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // DejaVu Sans is a valid TrueType font; a failure here would leave plotters
+        // without a font, which `draw` then reports as a drawing error.
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
+    });
+}
+
+/// Writes the plot of `rows` to `path` (SVG or PNG by extension), with `error` as the
+/// vertical axis.
+pub fn write(rows: &[Row], error: Axis, path: &str) -> Result<()> {
+    let format = PlotFormat::of(path).map_err(|m| plot_error(path, m))?;
+    font();
+    match format {
+        PlotFormat::Svg => {
+            let root = SVGBackend::new(path, SIZE).into_drawing_area();
+            draw(&root, rows, error).map_err(|e| plot_error(path, e))?;
+            root.present().map_err(|e| plot_error(path, e))
+        }
+        PlotFormat::Png => {
+            let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+            draw(&root, rows, error).map_err(|e| plot_error(path, e))?;
+            root.present().map_err(|e| plot_error(path, e))
+        }
+    }
+}
+
+/// The range of `v` with a 5 % margin (a unit range around a single value).
+fn padded(v: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = v
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    if !(lo.is_finite() && hi.is_finite()) {
+        0.0..1.0
+    } else if hi > lo {
+        let m = (hi - lo) * 0.05;
+        lo - m..hi + m
+    } else {
+        let m = if lo == 0.0 { 1.0 } else { lo.abs() * 0.05 };
+        lo - m..hi + m
+    }
+}
+
+/// A tick label: plain for moderate magnitudes, scientific otherwise.
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if (0.01..1e5).contains(&a) {
+        format!("{v:.3}").trim_end_matches('0').trim_end_matches('.').into()
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    rows: &[Row],
+    error: Axis,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
+    let panels = root.split_evenly((1, 2));
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    scenes.sort_unstable();
+    scenes.dedup();
+    for (area, x_axis) in panels.iter().zip([Axis::Cost, Axis::Throughput]) {
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!("{} vs {}", error.name(), x_axis.name()),
+                ("sans-serif", 18),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                padded(rows.iter().map(|r| x_axis.value(r))),
+                padded(rows.iter().map(|r| error.value(r))),
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc(x_axis.name())
+            .y_desc(error.name())
+            .x_labels(6)
+            .y_labels(6)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .label_style(("sans-serif", 12))
+            .draw()?;
+        chart
+            .draw_series(rows.iter().map(|r| {
+                Circle::new(
+                    (x_axis.value(r), error.value(r)),
+                    3,
+                    RGBColor(150, 150, 150).filled(),
+                )
+            }))?
+            .label("configuration")
+            .legend(|(x, y)| Circle::new((x + 10, y), 3, RGBColor(150, 150, 150).filled()));
+        let idx = front(rows, &[error, x_axis]);
+        for (k, scene) in scenes.iter().enumerate() {
+            let colour = if k == 0 {
+                RED.to_rgba()
+            } else {
+                Palette99::pick(k).to_rgba()
+            };
+            let mut pts: Vec<(f64, f64)> = idx
+                .iter()
+                .map(|&i| &rows[i])
+                .filter(|r| r.scene == *scene)
+                .map(|r| (x_axis.value(r), error.value(r)))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))?
+                .label(format!("Pareto front: {scene}"))
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2))
+                });
+            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 12))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+    }
+    Ok(())
+}
