@@ -47,7 +47,7 @@ fn verilator(test: &str) -> bool {
         return true;
     }
     println!(
-        "SKIP {test} under Verilator: verilator not installed (apt-get install -y verilator); Verilator co-simulation not run"
+        "SKIP {test} under Verilator: verilator (with make, g++) not installed (apt-get install -y verilator make g++); Verilator co-simulation not run"
     );
     false
 }

@@ -45,7 +45,7 @@ impl Sim {
     pub fn programs(self) -> &'static [&'static str] {
         match self {
             Sim::Icarus => &["iverilog", "vvp"],
-            Sim::Verilator => &["verilator"],
+            Sim::Verilator => &["verilator", "make", "g++"],
         }
     }
 
