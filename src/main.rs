@@ -120,7 +120,7 @@ struct HdlVectorsArgs {
     sim: String,
     /// With --run, stage logdomain: the full pair space (tb_log_adder_exhaustive, one
     /// signature per row); a failing row is then run pair by pair to name the pair.
-    #[arg(long)]
+    #[arg(long, requires = "run")]
     exhaustive: bool,
 }
 

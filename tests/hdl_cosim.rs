@@ -425,3 +425,73 @@ fn exhaustive_signatures_fold_each_row_in_order() {
     );
     assert_eq!(exhaustive::failed_row("1 of 3 vectors differ"), None);
 }
+
+#[test]
+fn cli_runs_the_exhaustive_log_adder_and_refuses_bad_flags() {
+    let igemu = env!("CARGO_BIN_EXE_igemu");
+    let d = dir("cli");
+    let out = |args: &[&str]| {
+        let o = std::process::Command::new(igemu)
+            .args(args)
+            .output()
+            .expect("run igemu");
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr),
+        )
+    };
+    let ds = d.display().to_string();
+    let (c, t) = out(&[
+        "hdl", "vectors", "--stage", "gamma", "--out", &ds, "--run", "--sim", "ghdl",
+    ]);
+    assert_eq!(c, Some(2), "{t}");
+    assert!(
+        t.contains("--sim") && t.contains("icarus, verilator"),
+        "{t}"
+    );
+    let (c, t) = out(&[
+        "hdl",
+        "vectors",
+        "--stage",
+        "gamma",
+        "--out",
+        &ds,
+        "--run",
+        "--exhaustive",
+    ]);
+    assert_eq!(c, Some(2), "{t}");
+    assert!(t.contains("--stage logdomain"), "{t}");
+    if !verilator("cli --exhaustive") {
+        return;
+    }
+    std::fs::create_dir_all(&d).expect("dir");
+    let hw_file = d.join("log7-fa0.toml");
+    std::fs::write(
+        &hw_file,
+        "preset = \"log7-logadd\"\n[coding]\nacc_frac_bits = 0\n",
+    )
+    .expect("hw");
+    let hw_s = hw_file.display().to_string();
+    let bench = d.join("bench").display().to_string();
+    let (c, t) = out(&[
+        "hdl",
+        "vectors",
+        "--stage",
+        "logdomain",
+        "--hw",
+        &hw_s,
+        "default-pinhole",
+        "--out",
+        &bench,
+        "--run",
+        "--sim",
+        "verilator",
+        "--exhaustive",
+    ]);
+    assert_eq!(c, Some(0), "{t}");
+    assert!(
+        t.contains("verilator: tb_log_adder_exhaustive: TESTBENCH OK 262144 vectors (every pair)"),
+        "{t}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

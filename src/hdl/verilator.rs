@@ -112,12 +112,13 @@ pub fn build(
     let rtl_v = m.join("rtl").join(format!("{module}.v"));
     let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
     let (tb_src, rtl_src, params) = (read(&tb_v)?, read(&rtl_v)?, read(&dir.join("params.vh"))?);
+    let ver = version();
     let h = super::synth::fnv(&[
         &tb_src,
         &rtl_src,
         &params,
         FLAGS.join(" ").as_bytes(),
-        version().as_bytes(),
+        ver.as_bytes(),
     ]);
     let name = format!("{tb}-{h:016x}");
     let exe = format!("V{tb}");
@@ -165,7 +166,7 @@ pub fn build(
     // keeps it) before the model's own C++ is compiled.
     let runtime = cache.join(format!(
         "runtime-{:016x}",
-        super::synth::fnv(&[FLAGS.join(" ").as_bytes(), version().as_bytes()])
+        super::synth::fnv(&[FLAGS.join(" ").as_bytes(), ver.as_bytes()])
     ));
     let had_runtime = runtime_objects(&runtime)
         .into_iter()
