@@ -118,6 +118,13 @@ struct HdlVectorsArgs {
     /// Also run the testbench under Icarus Verilog (exit 1 when it fails).
     #[arg(long)]
     run: bool,
+    /// Simulator for --run: icarus or verilator (build cached in target/hdl-verilator).
+    #[arg(long, default_value = "icarus")]
+    sim: String,
+    /// With --run, stage logdomain: the full pair space (tb_log_adder_exhaustive, one
+    /// signature per row); a failing row is then run pair by pair to name the pair.
+    #[arg(long, requires = "run")]
+    exhaustive: bool,
 }
 
 #[derive(Args)]
@@ -911,6 +918,18 @@ fn hdl_vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
     use igemu::hdl;
     let scene = load_scene(a.s.scene.as_deref())?;
     let hw = HwConfig::resolve(a.s.hw.as_deref())?;
+    let sim = hdl::verilator::Sim::parse(&a.sim).ok_or_else(|| {
+        arg_error(
+            "--sim",
+            format!("unknown simulator `{}`; allowed: icarus, verilator", a.sim),
+        )
+    })?;
+    if a.exhaustive && a.stage != "logdomain" {
+        return Err(arg_error(
+            "--exhaustive",
+            "only the log adder (--stage logdomain) has an exhaustive testbench".into(),
+        ));
+    }
     let b = hdl::vectors(&a.stage, &scene, &hw)?;
     let dir = std::path::Path::new(&a.out);
     b.write(dir)?;
@@ -929,22 +948,82 @@ fn hdl_vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
     if !a.run {
         return Ok(ExitCode::SUCCESS);
     }
-    let r = hdl::run_icarus_timed(b.module, dir).map_err(|m| arg_error("--run", m))?;
+    let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("hdl-verilator");
+    if a.exhaustive {
+        return hdl_exhaustive(sim, &b, dir, &cache, &scene, &hw);
+    }
+    let tb = format!("tb_{}", b.module);
+    let r = sim
+        .run(&tb, b.module, dir, &cache)
+        .map_err(|m| arg_error("--run", m))?;
     match r.verdict {
         hdl::Verdict::Ok(n) => {
             let rust = n as f64 / (b.model_ns.max(1) as f64 * 1e-9);
-            let sim = n as f64 / r.sim_s;
+            let sim_rate = n as f64 / r.sim_s;
             println!(
-                "icarus: TESTBENCH OK {n} vectors | compile {:.2} s, simulate {:.3} s = {sim:.0} vectors/s | Rust model {:.3} ms = {rust:.0} vectors/s | Rust / Verilog = {:.0}x",
+                "{}: TESTBENCH OK {n} vectors | compile {:.2} s, simulate {:.3} s = {sim_rate:.0} vectors/s | Rust model {:.3} ms = {rust:.0} vectors/s | Rust / Verilog = {:.0}x",
+                sim.name(),
                 r.compile_s,
                 r.sim_s,
                 b.model_ns as f64 * 1e-6,
-                rust / sim
+                rust / sim_rate
             );
             Ok(ExitCode::SUCCESS)
         }
         hdl::Verdict::Failed(m) => {
-            println!("icarus: TESTBENCH FAILED: {m}");
+            println!("{}: TESTBENCH FAILED: {m}", sim.name());
+            Ok(ExitCode::from(1))
+        }
+    }
+}
+
+/// `hdl vectors --stage logdomain --run --exhaustive`: the full pair space by row
+/// signatures; a failing row is then run pair by pair with the vector testbench.
+fn hdl_exhaustive(
+    sim: igemu::hdl::verilator::Sim,
+    b: &igemu::hdl::Bench,
+    dir: &std::path::Path,
+    cache: &std::path::Path,
+    scene: &Scene,
+    hw: &HwConfig,
+) -> Result<ExitCode, Error> {
+    use igemu::hdl::{self, exhaustive};
+    let r = sim
+        .run(exhaustive::TESTBENCH, b.module, dir, cache)
+        .map_err(|m| arg_error("--run", m))?;
+    match r.verdict {
+        hdl::Verdict::Ok(n) => {
+            println!(
+                "{}: {}: TESTBENCH OK {n} vectors (every pair) | compile {:.2} s, simulate {:.2} s = {:.0} vectors/s",
+                sim.name(),
+                exhaustive::TESTBENCH,
+                r.compile_s,
+                r.sim_s,
+                n as f64 / r.sim_s
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        hdl::Verdict::Failed(m) => {
+            println!(
+                "{}: {}: TESTBENCH FAILED: {m}",
+                sim.name(),
+                exhaustive::TESTBENCH
+            );
+            if let Some(row) = exhaustive::failed_row(&m) {
+                let rb = exhaustive::row_bench(scene, hw, row)?;
+                let rdir = dir.join(format!("row-{row}"));
+                rb.write(&rdir)?;
+                let rr = sim
+                    .run(&format!("tb_{}", rb.module), rb.module, &rdir, cache)
+                    .map_err(|m| arg_error("--run", m))?;
+                let v = match rr.verdict {
+                    hdl::Verdict::Ok(n) => format!("TESTBENCH OK {n} vectors"),
+                    hdl::Verdict::Failed(m) => format!("TESTBENCH FAILED: {m}"),
+                };
+                println!("row a={row} pair by pair ({}): {v}", rdir.display());
+            }
             Ok(ExitCode::from(1))
         }
     }

@@ -1,13 +1,15 @@
 //! HDL co-simulation: every Verilog model in hdl-models/rtl/ agrees bit for bit with the
 //! Rust model on its vectors (scene taps, exhaustive, random) at two or more width
-//! settings, under Icarus Verilog. Without iverilog installed the simulator tests print a
-//! skip line and pass; the vector and verdict tests run everywhere.
+//! settings, under Icarus Verilog and Verilator; the log adder also on its full pair space.
+//! Without a simulator installed the simulator tests print a skip line for it and pass; the
+//! vector and verdict tests run everywhere.
 
 mod common;
 
 use common::{hw, scene, tri};
 use igemu::fixed::{Overflow, QFormat, Quant};
-use igemu::hdl::{self, Bench, Verdict};
+use igemu::hdl::verilator::Sim;
+use igemu::hdl::{self, Bench, Verdict, exhaustive};
 use igemu::hw::HwConfig;
 use igemu::scene::Scene;
 use igemu::stage::dither::DitherKind;
@@ -39,6 +41,34 @@ fn icarus(test: &str) -> bool {
     false
 }
 
+/// Whether Verilator is installed; prints the skip line when it is not.
+fn verilator(test: &str) -> bool {
+    if Sim::Verilator.available() {
+        return true;
+    }
+    println!(
+        "SKIP {test} under Verilator: verilator (with make, g++) not installed (apt-get install -y verilator make g++); Verilator co-simulation not run"
+    );
+    false
+}
+
+/// Verilator builds, shared by all tests and kept between runs (keyed by the testbench,
+/// module and params.vh).
+fn verilator_cache() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hdl-verilator")
+}
+
+/// Writes the bench and runs testbench `tb` on it under `sim`.
+fn run_tb(sim: Sim, tb: &str, b: &Bench, tag: &str) -> Verdict {
+    let d = dir(&format!("{}-{tag}", sim.name()));
+    b.write(&d).expect("write bench");
+    let v = sim
+        .run(tb, b.module, &d, &verilator_cache())
+        .unwrap_or_else(|e| panic!("{tag} under {}: {e}", sim.name()));
+    let _ = std::fs::remove_dir_all(&d);
+    v.verdict
+}
+
 fn dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("igemu-hdl-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -53,20 +83,33 @@ fn run(b: &Bench, tag: &str) -> Verdict {
     v
 }
 
-/// Builds the stage's bench for each config and checks that the testbench passes all vectors.
+/// Builds the stage's bench for each config and checks that the testbench passes all
+/// vectors, under Icarus Verilog and under Verilator (each when installed).
 fn agree(stage: &str, configs: &[(&str, HwConfig)], sc: &Scene) {
-    if !icarus(stage) {
+    let sims: Vec<Sim> = [
+        (Sim::Icarus, icarus(stage)),
+        (Sim::Verilator, verilator(stage)),
+    ]
+    .into_iter()
+    .filter(|s| s.1)
+    .map(|s| s.0)
+    .collect();
+    if sims.is_empty() {
         return;
     }
     let mut widths = std::collections::BTreeSet::new();
     for (tag, h) in configs {
         let b = hdl::vectors(stage, sc, h).unwrap_or_else(|e| panic!("{tag}: {e}"));
         widths.insert(b.params.clone());
-        assert_eq!(
-            run(&b, &format!("{stage}-{tag}")),
-            Verdict::Ok(b.vectors.len() as u64),
-            "{stage} at {tag}"
-        );
+        for &sim in &sims {
+            let tb = format!("tb_{}", b.module);
+            assert_eq!(
+                run_tb(sim, &tb, &b, &format!("{stage}-{tag}")),
+                Verdict::Ok(b.vectors.len() as u64),
+                "{stage} at {tag} under {}",
+                sim.name()
+            );
+        }
     }
     assert!(widths.len() >= 2, "{stage}: two or more width settings");
 }
@@ -230,4 +273,225 @@ fn params_file_carries_the_widths() {
     assert!(p.contains("`define P_ACC_BITS 8\n"), "{p}");
     assert!(p.contains(&format!("`define N_VECTORS {}\n", b.vectors.len())));
     assert_eq!(b.roms[0].1.len(), 256);
+}
+
+/// A log-add setting with a 9-bit frame code (7-bit log code, no extra fraction bits): its
+/// full pair space (2^18) is small enough for Icarus too.
+fn log7_fa0() -> HwConfig {
+    hw("log7-logadd", |h| h.coding.acc_frac_bits = 0)
+}
+
+/// The log adder on every pair of frame codes, at four settings: under Verilator at all of
+/// them (2^24 pairs at the 12-bit default frame codes), under Icarus at the 9-bit one only
+/// (2^24 pairs take over 2 minutes in vvp on the development machine).
+#[test]
+fn log_adder_agrees_on_every_pair() {
+    let sc = small_scene();
+    let cfgs = [
+        ("log8-logadd", hw("log8-logadd", |_| {})),
+        ("log7-logadd", hw("log7-logadd", |_| {})),
+        (
+            "log8-interp-tf2-a6",
+            hw("log8-logadd", |h| {
+                h.coding.interpolate = true;
+                h.coding.table_frac_bits = 2;
+                h.coding.table_addr_bits = 6;
+            }),
+        ),
+        ("log7-fa0", log7_fa0()),
+    ];
+    let benches: Vec<(&str, Bench)> = cfgs
+        .iter()
+        .map(|(t, h)| (*t, hdl::vectors("logdomain", &sc, h).expect("bench")))
+        .collect();
+    let fb = |b: &Bench| b.params.iter().find(|p| p.0 == "FB").expect("FB").1;
+    // The default presets' frame codes are 12 bits; one signature per row of the full space.
+    assert_eq!(fb(&benches[0].1), 12);
+    assert_eq!(fb(&benches[3].1), 9);
+    for (_, b) in &benches {
+        let sig = b
+            .roms
+            .iter()
+            .find(|r| r.0 == exhaustive::SIG_FILE)
+            .expect("signatures");
+        assert_eq!(sig.1.len(), 1 << fb(b));
+    }
+    let widths: std::collections::BTreeSet<_> = benches.iter().map(|b| &b.1.params).collect();
+    assert_eq!(widths.len(), 4);
+    let mut ran = 0;
+    if icarus("log adder, every pair at FB=9") {
+        let b = &benches[3].1;
+        assert_eq!(
+            run_tb(Sim::Icarus, exhaustive::TESTBENCH, b, "log-all-log7-fa0"),
+            Verdict::Ok(1 << 18)
+        );
+        ran += 1;
+    }
+    if verilator("log adder, every pair at FB=12 (three settings) and FB=9") {
+        for (tag, b) in &benches {
+            let n = exhaustive::pairs(b).expect("pairs");
+            assert_eq!(
+                run_tb(
+                    Sim::Verilator,
+                    exhaustive::TESTBENCH,
+                    b,
+                    &format!("log-all-{tag}")
+                ),
+                Verdict::Ok(n),
+                "every pair at {tag}"
+            );
+            ran += 1;
+        }
+    }
+    if ran == 0 {
+        println!("SKIP log adder on every pair: no simulator installed");
+    }
+}
+
+/// A corrupted expected signature fails the exhaustive testbench and names its row (whose
+/// pair-by-pair run then passes: the model and RTL agree, the signature was wrong); a
+/// corrupted ROM entry fails it too, and the failing row's pair-by-pair run names the pair.
+#[test]
+fn a_corrupted_signature_or_rom_entry_fails_the_exhaustive_testbench() {
+    let sc = small_scene();
+    let h = log7_fa0();
+    let sims: Vec<Sim> = [
+        (Sim::Icarus, icarus("corrupted signature")),
+        (Sim::Verilator, verilator("corrupted signature")),
+    ]
+    .into_iter()
+    .filter(|s| s.1)
+    .map(|s| s.0)
+    .collect();
+    for sim in sims {
+        let good = hdl::vectors("logdomain", &sc, &h).expect("bench");
+        let sig_k = good
+            .roms
+            .iter()
+            .position(|r| r.0 == exhaustive::SIG_FILE)
+            .expect("sig");
+        let mut b = good.clone();
+        b.roms[sig_k].1[37] ^= 1 << 20;
+        let m = match run_tb(sim, exhaustive::TESTBENCH, &b, "log-bad-sig") {
+            Verdict::Failed(m) => m,
+            v => panic!("a corrupted signature passed under {}: {v:?}", sim.name()),
+        };
+        assert!(
+            m.starts_with("1 of 512 rows differ, first row a=37 "),
+            "{m}"
+        );
+        let row = exhaustive::failed_row(&m).expect("row");
+        let rb = exhaustive::row_bench(&sc, &h, row).expect("row bench");
+        assert!(rb.vectors.iter().all(|v| v[0] == 37));
+        assert_eq!(
+            run_tb(sim, "tb_log_adder", &rb, "log-row-37"),
+            Verdict::Ok(512)
+        );
+        // One ROM entry off by one: sb(2^SHIFT) is used by every pair at difference 1..
+        let mut b = good.clone();
+        let rom_k = b
+            .roms
+            .iter()
+            .position(|r| r.0 == "log_rom.hex")
+            .expect("rom");
+        b.roms[rom_k].1[1] ^= 1;
+        let m = match run_tb(sim, exhaustive::TESTBENCH, &b, "log-bad-rom") {
+            Verdict::Failed(m) => m,
+            v => panic!("a corrupted ROM entry passed under {}: {v:?}", sim.name()),
+        };
+        let row = exhaustive::failed_row(&m).expect("row");
+        let mut rb = exhaustive::row_bench(&sc, &h, row).expect("row bench");
+        rb.roms[rom_k].1[1] ^= 1;
+        match run_tb(sim, "tb_log_adder", &rb, "log-row-bad-rom") {
+            Verdict::Failed(m) => assert!(m.contains(&format!("(a={row:x} b=")), "{m}"),
+            v => panic!("row {row} with a corrupted ROM passed: {v:?}"),
+        }
+    }
+}
+
+#[test]
+fn exhaustive_signatures_fold_each_row_in_order() {
+    // FNV-1a over output words; the order matters and any single change shows.
+    let s = exhaustive::signature([1, 2, 3]);
+    assert_ne!(s, exhaustive::signature([2, 1, 3]));
+    assert_ne!(s, exhaustive::signature([1, 2, 2]));
+    assert_eq!(exhaustive::signature([]), exhaustive::FNV_BASIS);
+    let rows = exhaustive::row_signatures(3, |a, c| a * 8 + c);
+    assert_eq!(rows.len(), 8);
+    assert_eq!(rows[5] as u32, exhaustive::signature(40..48));
+    assert_eq!(
+        exhaustive::failed_row("1 of 512 rows differ, first row a=37 (x)"),
+        Some(37)
+    );
+    assert_eq!(exhaustive::failed_row("1 of 3 vectors differ"), None);
+}
+
+#[test]
+fn cli_runs_the_exhaustive_log_adder_and_refuses_bad_flags() {
+    let igemu = env!("CARGO_BIN_EXE_igemu");
+    let d = dir("cli");
+    let out = |args: &[&str]| {
+        let o = std::process::Command::new(igemu)
+            .args(args)
+            .output()
+            .expect("run igemu");
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr),
+        )
+    };
+    let ds = d.display().to_string();
+    let (c, t) = out(&[
+        "hdl", "vectors", "--stage", "gamma", "--out", &ds, "--run", "--sim", "ghdl",
+    ]);
+    assert_eq!(c, Some(2), "{t}");
+    assert!(
+        t.contains("--sim") && t.contains("icarus, verilator"),
+        "{t}"
+    );
+    let (c, t) = out(&[
+        "hdl",
+        "vectors",
+        "--stage",
+        "gamma",
+        "--out",
+        &ds,
+        "--run",
+        "--exhaustive",
+    ]);
+    assert_eq!(c, Some(2), "{t}");
+    assert!(t.contains("--stage logdomain"), "{t}");
+    if !verilator("cli --exhaustive") {
+        return;
+    }
+    std::fs::create_dir_all(&d).expect("dir");
+    let hw_file = d.join("log7-fa0.toml");
+    std::fs::write(
+        &hw_file,
+        "preset = \"log7-logadd\"\n[coding]\nacc_frac_bits = 0\n",
+    )
+    .expect("hw");
+    let hw_s = hw_file.display().to_string();
+    let bench = d.join("bench").display().to_string();
+    let (c, t) = out(&[
+        "hdl",
+        "vectors",
+        "--stage",
+        "logdomain",
+        "--hw",
+        &hw_s,
+        "default-pinhole",
+        "--out",
+        &bench,
+        "--run",
+        "--sim",
+        "verilator",
+        "--exhaustive",
+    ]);
+    assert_eq!(c, Some(0), "{t}");
+    assert!(
+        t.contains("verilator: tb_log_adder_exhaustive: TESTBENCH OK 262144 vectors (every pair)"),
+        "{t}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -17,7 +17,7 @@ use crate::stage::accumulate::AccParams;
 use crate::stage::dither::{Mask, extended_lut, ordered_code};
 use crate::stage::gamma::{GammaLut, GammaSpec};
 use crate::stage::input::QPrim;
-use crate::stage::logdomain::{CodingKind, LogAdder, log_code};
+use crate::stage::logdomain::CodingKind;
 use crate::stage::setup::Edge;
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -25,7 +25,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
+pub mod exhaustive;
 pub mod synth;
+pub mod verilator;
 
 /// Stages with an HDL model: (stage name, Verilog module).
 pub const MODULES: &[(&str, &str)] = &[
@@ -118,7 +120,7 @@ impl Rng {
     }
 }
 
-fn bad(hw: &HwConfig, field: &str, msg: String) -> Error {
+pub(crate) fn bad(hw: &HwConfig, field: &str, msg: String) -> Error {
     Error::File(FileError {
         file: hw.name.clone(),
         line: None,
@@ -395,17 +397,7 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
             b.model_ns = t.elapsed().as_nanos() as u64;
         }
         "logdomain" => {
-            if hw.coding.kind != CodingKind::LogAdd {
-                return Err(bad(
-                    hw,
-                    "coding.kind",
-                    "the log adder needs a log-add coding (e.g. --hw log8-logadd)".into(),
-                ));
-            }
-            let f = pipeline::front(scene, hw)?;
-            let k = &f.kernel;
-            let w_min = k.w.iter().copied().filter(|&w| w > 0).min().unwrap_or(1);
-            let add = LogAdder::new(log_code(scene, hw)?, &hw.coding, k.f, w_min);
+            let add = exhaustive::log_adder_of(scene, hw)?;
             let fb = add.frame_bits();
             let td = add.table_data_bits().max(1);
             b.params = vec![
@@ -417,10 +409,17 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
                 ("INTERP".into(), add.interpolate as i64),
                 ("MAX".into(), add.max),
             ];
-            b.roms = vec![(
-                "log_rom.hex".into(),
-                add.sb.iter().map(|&v| v as u64).collect(),
-            )];
+            b.roms = vec![
+                (
+                    "log_rom.hex".into(),
+                    add.sb.iter().map(|&v| v as u64).collect(),
+                ),
+                // The full pair space, for tb_log_adder_exhaustive: one signature per row.
+                (
+                    exhaustive::SIG_FILE.into(),
+                    exhaustive::row_signatures(fb, |a, c| add.add(a, c)),
+                ),
+            ];
             b.fields = vec!["a", "b", "s"];
             let one = |a: i64, c: i64| vec![a as u64, c as u64, add.add(a, c) as u64];
             // Exhaustive over all pairs of 8-bit codes (the zero code, the smallest sums).
@@ -612,6 +611,11 @@ pub fn run_icarus(module: &str, dir: &Path) -> std::result::Result<Verdict, Stri
 
 /// [`run_icarus`] with the compile and simulation wall times.
 pub fn run_icarus_timed(module: &str, dir: &Path) -> std::result::Result<SimRun, String> {
+    run_icarus_tb(&format!("tb_{module}"), module, dir)
+}
+
+/// [`run_icarus_timed`] of testbench `tb` (`hdl-models/tb/<tb>.v`) of `module`.
+pub fn run_icarus_tb(tb: &str, module: &str, dir: &Path) -> std::result::Result<SimRun, String> {
     let m = models_dir();
     let sim = dir.join("sim.vvp");
     let t = Instant::now();
@@ -621,7 +625,7 @@ pub fn run_icarus_timed(module: &str, dir: &Path) -> std::result::Result<SimRun,
         .arg(dir)
         .arg("-o")
         .arg(&sim)
-        .arg(m.join("tb").join(format!("tb_{module}.v")))
+        .arg(m.join("tb").join(format!("{tb}.v")))
         .arg(m.join("rtl").join(format!("{module}.v")))
         .output()
         .map_err(|e| format!("iverilog: {e}"))?;

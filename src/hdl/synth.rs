@@ -33,7 +33,7 @@ impl SynthCells {
 }
 
 /// FNV-1a 64 of the synthesis inputs.
-fn fnv(parts: &[&[u8]]) -> u64 {
+pub(crate) fn fnv(parts: &[&[u8]]) -> u64 {
     let mut h = 0xcbf2_9ce4_8422_2325u64;
     for p in parts {
         for &b in *p {
