@@ -269,7 +269,12 @@ fn dof_row_mac_agrees_on_scene_taps_at_two_widths() {
     }
     assert!(narrow.vectors.iter().any(|v| v[o + 3] < 1 << 8));
     // The default widths never saturate.
-    assert!(default.vectors.iter().all(|v| v[dof_out(&default) + 1] == 0));
+    assert!(
+        default
+            .vectors
+            .iter()
+            .all(|v| v[dof_out(&default) + 1] == 0)
+    );
     if !icarus("dof") {
         return;
     }

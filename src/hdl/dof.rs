@@ -115,7 +115,12 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
         let r = row_mac(c, pos, len, max, |i| {
             (xs[at(i)] as u128, as_[at(i)] as u128)
         });
-        [r.x as u64, r.overflow as u64, r.a as u64, border_sum(c, pos, len)]
+        [
+            r.x as u64,
+            r.overflow as u64,
+            r.a as u64,
+            border_sum(c, pos, len),
+        ]
     };
     // A vector's inputs: samples on the line from `on(i)`, random values off it.
     let window = |rng: &mut Rng,
@@ -177,9 +182,16 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
                     }
                 };
                 let mut v = window(rng, 0, lp.layer, px, w, &mut inb);
-                v.extend([r.x as u64, r.overflow as u64, r.a as u64, border_sum(c, px, w)]);
+                v.extend([
+                    r.x as u64,
+                    r.overflow as u64,
+                    r.a as u64,
+                    border_sum(c, px, w),
+                ]);
                 scene_v.push(v);
-                let r = row_mac(c, y, bh, acc_max, |i| (lp.hx[i * bw + x], lp.ha[i * bw + x]));
+                let r = row_mac(c, y, bh, acc_max, |i| {
+                    (lp.hx[i * bw + x], lp.ha[i * bw + x])
+                });
                 let mut inb = |i: usize| -> (u64, u64) {
                     if (lp.y0..lp.y0 + bh).contains(&i) {
                         let j = (i - lp.y0) * bw + x;
@@ -189,7 +201,12 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
                     }
                 };
                 let mut v = window(rng, 1, lp.layer, py, h, &mut inb);
-                v.extend([r.x as u64, r.overflow as u64, r.a as u64, border_sum(c, py, h)]);
+                v.extend([
+                    r.x as u64,
+                    r.overflow as u64,
+                    r.a as u64,
+                    border_sum(c, py, h),
+                ]);
                 scene_v.push(v);
             }
         }
@@ -197,7 +214,11 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     // With dof.overflow = ERROR a saturating run stops; the taps observed so far are kept.
     let _ = layered_fixed_observed(&img, &plan, p, frame_fmt, observe);
     // The module's form (image coordinates, off-box samples zero) gives the pipeline's values.
-    debug_assert!(scene_v.iter().all(|v| one(&v[..4 + 2 * taps])[..] == v[4 + 2 * taps..]));
+    debug_assert!(
+        scene_v
+            .iter()
+            .all(|v| one(&v[..4 + 2 * taps])[..] == v[4 + 2 * taps..])
+    );
     b.sources.push(("scene", scene_v.len()));
     b.vectors = scene_v;
     let layers: Vec<usize> = (0..plan.layers.len())
