@@ -167,7 +167,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
         for y in 0..bh {
             for x in 0..bw {
                 k += 1;
-                if k % stride != 0 {
+                if !k.is_multiple_of(stride) {
                     continue;
                 }
                 let (px, py) = (x + lp.x0, y + lp.y0);
