@@ -495,3 +495,107 @@ fn cli_runs_the_exhaustive_log_adder_and_refuses_bad_flags() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Narrow dof words: 8-bit coefficients, a 16-bit line buffer and an 18-bit accumulator
+/// saturate on the default scene (both passes).
+fn dof_narrow() -> HwConfig {
+    hw("linear12", |h| {
+        h.dof.coef_bits = 8;
+        h.dof.line_bits = 16;
+        h.dof.acc_bits = 18;
+    })
+}
+
+/// Index of the first expected-output field of a dof bench (pass, layer, pos, len, windows).
+fn dof_out(b: &Bench) -> usize {
+    b.fields.len() - 4
+}
+
+#[test]
+fn dof_row_mac_agrees_on_scene_taps_at_two_widths() {
+    let sc = Scene::default_scene();
+    let narrow = hdl::vectors("dof", &sc, &dof_narrow()).expect("bench");
+    let default = hdl::vectors("dof", &sc, &hw("linear12", |_| {})).expect("bench");
+    assert_ne!(narrow.params, default.params);
+    let o = dof_out(&narrow);
+    let n_scene = narrow.sources[0].1;
+    assert_eq!(narrow.sources[0].0, "scene");
+    assert!(n_scene >= 1000, "{:?}", narrow.sources);
+    // The narrow words saturate on real scene taps in both passes, and some outputs sit at
+    // the image border (renormalisation weight below 2^f).
+    for pass in 0..2 {
+        assert!(
+            narrow.vectors[..n_scene]
+                .iter()
+                .any(|v| v[0] == pass && v[o + 1] == 1),
+            "pass {pass} saturates"
+        );
+    }
+    assert!(narrow.vectors.iter().any(|v| v[o + 3] < 1 << 8));
+    // The default widths never saturate.
+    assert!(
+        default
+            .vectors
+            .iter()
+            .all(|v| v[dof_out(&default) + 1] == 0)
+    );
+    for (sim, installed) in [
+        (Sim::Icarus, icarus("dof")),
+        (Sim::Verilator, verilator("dof")),
+    ] {
+        if !installed {
+            continue;
+        }
+        for (tag, b) in [("linear12", &default), ("narrow", &narrow)] {
+            assert_eq!(
+                run_tb(sim, "tb_dof_row_mac", b, &format!("dof-{tag}")),
+                Verdict::Ok(b.vectors.len() as u64),
+                "dof at {tag} under {}",
+                sim.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn dof_row_mac_gates_off_line_taps_and_broken_vectors_fail() {
+    if !icarus("dof broken vector") {
+        return;
+    }
+    let sc = Scene::default_scene();
+    let mut b = hdl::vectors("dof", &sc, &dof_narrow()).expect("bench");
+    let (o, taps) = (dof_out(&b), (b.fields.len() - 8) / 2);
+    let half = taps / 2;
+    // Vectors at the left image border: their first window samples lie off the line.
+    let border: Vec<usize> = (0..b.vectors.len())
+        .filter(|&k| b.vectors[k][2] == 0 && b.vectors[k][3] > 1)
+        .take(4)
+        .collect();
+    assert_eq!(border.len(), 4);
+    // Off-line samples are ignored: changing them does not fail the vector.
+    b.vectors[border[0]][4] ^= 1;
+    b.vectors[border[0]][4 + taps] ^= 1;
+    // A changed expected colour sum, overflow flag or border weight fails.
+    for (k, field) in [(border[1], o), (border[2], o + 1), (border[3], o + 3)] {
+        b.vectors[k][field] ^= 1;
+    }
+    // So does an on-line input sample whose coefficient is non-zero (the centre tap) of an
+    // unsaturated output.
+    let k = (0..b.vectors.len())
+        .find(|&k| !border.contains(&k) && b.vectors[k][o + 1] == 0 && b.vectors[k][o] > 0)
+        .expect("an unsaturated vector");
+    b.vectors[k][4 + half] ^= 1 << 4;
+    match run(&b, "dof-broken") {
+        Verdict::Failed(m) => assert!(m.starts_with("4 of "), "{m}"),
+        v => panic!("broken vectors passed: {v:?}"),
+    }
+}
+
+#[test]
+fn dof_row_mac_refuses_pinhole_scenes_and_wide_accumulators() {
+    let e = hdl::vectors("dof", &small_scene(), &hw("linear12", |_| {})).unwrap_err();
+    assert!(e.to_string().contains("camera.lens"), "{e}");
+    let wide = hw("linear12", |h| h.dof.acc_bits = 72);
+    let e = hdl::vectors("dof", &Scene::default_scene(), &wide).unwrap_err();
+    assert!(e.to_string().contains("dof.acc_bits"), "{e}");
+}

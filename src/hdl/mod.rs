@@ -36,7 +36,10 @@ pub const MODULES: &[(&str, &str)] = &[
     ("dither", "dither_ordered"),
     ("logdomain", "log_adder"),
     ("setup", "edge_stepper"),
+    ("dof", "dof_row_mac"),
 ];
+
+mod dof;
 
 /// The Verilog module of a stage name, if it has one.
 pub fn module_of(stage: &str) -> Option<&'static str> {
@@ -529,6 +532,7 @@ pub fn vectors(stage: &str, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
             }
             b.model_ns = t.elapsed().as_nanos() as u64;
         }
+        "dof" => dof::bench(&mut b, scene, hw, &mut rng)?,
         _ => unreachable!("module_of checked the name"),
     }
     Ok(b)

@@ -473,19 +473,85 @@ fn layer_box(
 
 /// In-image tap sums along one axis of length `n` for taps `c`.
 fn border_sums<T: Copy + Default + std::ops::AddAssign>(c: &[T], n: usize) -> Vec<T> {
+    (0..n).map(|x| border_sum(c, x, n)).collect()
+}
+
+/// The in-line tap sum at position `x` of a line of length `n` (the border renormalisation
+/// weight `Wx` or `Wy`): the sum of the taps `c[t]` whose sample `x + t - M` lies in
+/// `[0, n)`, `M = c.len() / 2`.
+pub fn border_sum<T: Copy + Default + std::ops::AddAssign>(c: &[T], x: usize, n: usize) -> T {
     let m = c.len() / 2;
-    (0..n)
-        .map(|x| {
-            let mut s = T::default();
-            for (t, &v) in c.iter().enumerate() {
-                let xi = x as i64 + t as i64 - m as i64;
-                if xi >= 0 && (xi as usize) < n {
-                    s += v;
-                }
-            }
-            s
-        })
-        .collect()
+    let mut s = T::default();
+    for (t, &v) in c.iter().enumerate() {
+        let xi = x as i64 + t as i64 - m as i64;
+        if xi >= 0 && (xi as usize) < n {
+            s += v;
+        }
+    }
+    s
+}
+
+/// One output sample of a 1-D pass (see [`row_mac`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MacOut {
+    /// Colour sum `sum c_t x_t`, saturated to the word's maximum.
+    pub x: u128,
+    /// Alpha sum `sum c_t a_t` (exact).
+    pub a: u128,
+    /// The colour sum did not fit the word (counted; stops the run with overflow ERROR).
+    pub overflow: bool,
+}
+
+/// One output sample of the horizontal or vertical pass: over the taps `t` whose sample
+/// `pos + t - M` lies on the line `[0, len)` (`M = coef.len() / 2`; samples off the line are
+/// zero), the colour sum saturated to `max` (the line-buffer or accumulator word) and the
+/// exact alpha sum. `sample(i)` gives the (colour, alpha) samples at line position `i`.
+/// The HDL model `hdl-models/rtl/dof_row_mac.v` is this function.
+#[inline(always)]
+pub fn row_mac(
+    coef: &[u64],
+    pos: usize,
+    len: usize,
+    max: u128,
+    sample: impl Fn(usize) -> (u128, u128),
+) -> MacOut {
+    let m = coef.len() / 2;
+    let t0 = m.saturating_sub(pos);
+    let t1 = coef.len().min((len + m).saturating_sub(pos));
+    let (mut sx, mut sa) = (0u128, 0u128);
+    for (t, &cv) in coef.iter().enumerate().take(t1).skip(t0) {
+        let (x, a) = sample(pos + t - m);
+        sx += cv as u128 * x;
+        sa += cv as u128 * a;
+    }
+    MacOut {
+        x: sx.min(max),
+        a: sa,
+        overflow: sx > max,
+    }
+}
+
+/// One layer's planes after the horizontal pass, over the layer's box (for the HDL vectors).
+#[derive(Clone, Copy, Debug)]
+pub struct LayerPlanes<'a> {
+    /// Layer index.
+    pub layer: usize,
+    /// Box origin in the image.
+    pub x0: usize,
+    /// Box origin in the image.
+    pub y0: usize,
+    /// Box width.
+    pub bw: usize,
+    /// Box height.
+    pub bh: usize,
+    /// Input colour plane `x * m` (row-major over the box).
+    pub xi: &'a [u128],
+    /// Input alpha plane `m`.
+    pub ai: &'a [u128],
+    /// Line buffer: horizontal colour sums (saturated).
+    pub hx: &'a [u128],
+    /// Line buffer: horizontal alpha sums.
+    pub ha: &'a [u128],
 }
 
 /// The pixel's share in a layer (in `1/n2` units).
@@ -511,6 +577,18 @@ pub fn layered_fixed(
     p: &DofParams,
     frame_fmt: QFormat,
 ) -> Result<(Vec<u32>, DofWork), (String, u32)> {
+    layered_fixed_observed(img, plan, p, frame_fmt, |_| {})
+}
+
+/// [`layered_fixed`], showing `observe` each blurred layer's planes after its horizontal
+/// pass (the HDL bench's scene taps).
+pub fn layered_fixed_observed(
+    img: &DepthImage<u32>,
+    plan: &LayerPlan,
+    p: &DofParams,
+    frame_fmt: QFormat,
+    mut observe: impl FnMut(&LayerPlanes),
+) -> Result<(Vec<u32>, DofWork), (String, u32)> {
     let (w, h) = (img.width, img.height);
     let f = p.coef_bits;
     let (q, g) = (p.alpha_bits, p.guard_bits);
@@ -527,7 +605,6 @@ pub fn layered_fixed(
         };
         let (bw, bh) = (x1 - x0, y1 - y0);
         let c = &layer.coef;
-        let m = layer.m as i64;
         let wx = border_sums(c, w);
         let wy = border_sums(c, h);
         // Input planes over the box.
@@ -563,50 +640,43 @@ pub fn layered_fixed(
         let mut hx = vec![0u128; bw * bh];
         let mut ha = vec![0u128; bw * bh];
         for y in 0..bh {
+            let (rx, ra) = (&xi[y * bw..(y + 1) * bw], &ai[y * bw..(y + 1) * bw]);
             for x in 0..bw {
-                let (mut sx, mut sa) = (0u128, 0u128);
-                for (t, &cv) in c.iter().enumerate() {
-                    let xx = x as i64 + t as i64 - m;
-                    if xx < 0 || xx >= bw as i64 {
-                        continue;
-                    }
-                    let k = y * bw + xx as usize;
-                    sx += cv as u128 * xi[k];
-                    sa += cv as u128 * ai[k];
-                }
+                let r = row_mac(c, x, bw, line_max, |i| (rx[i], ra[i]));
                 work.macs += 2 * c.len() as u64;
-                if sx > line_max {
+                if r.overflow {
                     work.line_overflows += 1;
                     if p.overflow == Overflow::Error {
                         return Err(("dof.line".into(), p.line_bits));
                     }
-                    sx = line_max;
                 }
-                hx[y * bw + x] = sx;
-                ha[y * bw + x] = sa;
+                hx[y * bw + x] = r.x;
+                ha[y * bw + x] = r.a;
             }
         }
+        observe(&LayerPlanes {
+            layer: l,
+            x0,
+            y0,
+            bw,
+            bh,
+            xi: &xi,
+            ai: &ai,
+            hx: &hx,
+            ha: &ha,
+        });
         // Vertical pass, colour, alpha, composite.
         for y in 0..bh {
             for x in 0..bw {
-                let (mut sx, mut sa) = (0u128, 0u128);
-                for (t, &cv) in c.iter().enumerate() {
-                    let yy = y as i64 + t as i64 - m;
-                    if yy < 0 || yy >= bh as i64 {
-                        continue;
-                    }
-                    let k = yy as usize * bw + x;
-                    sx += cv as u128 * hx[k];
-                    sa += cv as u128 * ha[k];
-                }
+                let r = row_mac(c, y, bh, acc_max, |i| (hx[i * bw + x], ha[i * bw + x]));
                 work.macs += 2 * c.len() as u64;
-                if sx > acc_max {
+                if r.overflow {
                     work.acc_overflows += 1;
                     if p.overflow == Overflow::Error {
                         return Err(("dof.acc".into(), p.acc_bits));
                     }
-                    sx = acc_max;
                 }
+                let (sx, sa) = (r.x, r.a);
                 if sa == 0 {
                     continue;
                 }

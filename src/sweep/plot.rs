@@ -106,7 +106,10 @@ fn tick(v: f64) -> String {
     if a == 0.0 {
         "0".into()
     } else if (0.01..1e5).contains(&a) {
-        format!("{v:.3}").trim_end_matches('0').trim_end_matches('.').into()
+        format!("{v:.3}")
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .into()
     } else {
         format!("{v:.2e}")
     }
