@@ -107,7 +107,7 @@ enum HdlCmd {
 
 #[derive(Args)]
 struct HdlVectorsArgs {
-    /// Stage: gamma, accumulate, dither, logdomain (log-add hardware), setup (edge stepper).
+    /// Stage: gamma, accumulate, dither, logdomain (log-add hardware), setup (edge stepper), dof (thin-lens scene).
     #[arg(long)]
     stage: String,
     #[command(flatten)]
@@ -115,7 +115,7 @@ struct HdlVectorsArgs {
     /// Output directory.
     #[arg(long)]
     out: String,
-    /// Also run the testbench under Icarus Verilog (exit 1 when it fails).
+    /// Also run the testbench (under --sim; exit 1 when it fails).
     #[arg(long)]
     run: bool,
     /// Simulator for --run: icarus or verilator (build cached in target/hdl-verilator).

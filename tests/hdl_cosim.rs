@@ -599,3 +599,25 @@ fn dof_row_mac_refuses_pinhole_scenes_and_wide_accumulators() {
     let e = hdl::vectors("dof", &Scene::default_scene(), &wide).unwrap_err();
     assert!(e.to_string().contains("dof.acc_bits"), "{e}");
 }
+
+/// `igemu cost --synth`: yosys cell counts of a module at two widths, then from the cache.
+#[test]
+fn yosys_cell_counts_grow_with_the_widths_and_are_cached() {
+    if !hdl::available("yosys") {
+        println!("SKIP yosys synthesis: yosys not installed (apt-get install -y yosys)");
+        return;
+    }
+    let sc = small_scene();
+    let cache = dir("synth-cache");
+    let narrow = hdl::vectors("accumulate", &sc, &hw("linear8", |_| {})).expect("bench");
+    let wide = hdl::vectors("accumulate", &sc, &hw("linear12", |_| {})).expect("bench");
+    let a = hdl::synth::synth(&narrow, &cache).expect("synth");
+    let b = hdl::synth::synth(&wide, &cache).expect("synth");
+    assert!(!a.cached && !b.cached);
+    assert!(a.cells > 0 && a.flip_flops() > 0, "{a:?}");
+    assert!(b.cells > a.cells, "wider words, more cells: {a:?} {b:?}");
+    let again = hdl::synth::synth(&narrow, &cache).expect("synth");
+    assert!(again.cached);
+    assert_eq!((again.cells, again.by_type), (a.cells, a.by_type));
+    let _ = std::fs::remove_dir_all(&cache);
+}
