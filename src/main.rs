@@ -85,7 +85,7 @@ struct SweepArgs {
     /// Plot error vs cost and error vs throughput with the Pareto fronts (SVG or PNG, by extension).
     #[arg(long, value_name = "PARETO.svg|png")]
     plot: Option<String>,
-    /// Add small-object flicker metrics to every row: the flicker scene swept over PHASES x PHASES sub-pixel phases (1..=64; `igemu flicker` uses 32).
+    /// Add small-object flicker metrics to every row: the flicker scene swept over PHASES x PHASES sub-pixel phases (2..=64; `igemu flicker` uses 32).
     #[arg(long, value_name = "PHASES")]
     flicker: Option<u32>,
 }
@@ -1097,11 +1097,11 @@ fn sweep(a: SweepArgs) -> Result<ExitCode, Error> {
         sweep::plot::PlotFormat::of(p).map_err(|m| arg_error("--plot", m))?;
     }
     if let Some(n) = a.flicker
-        && !(1..=64).contains(&n)
+        && !(2..=64).contains(&n)
     {
         return Err(arg_error(
             "--flicker",
-            format!("phases must be in 1..=64, got {n}"),
+            format!("phases must be in 2..=64, got {n}"),
         ));
     }
     if a.flicker.is_none() && axes.contains(&pareto::Axis::Flicker) {

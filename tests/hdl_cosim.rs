@@ -187,10 +187,9 @@ fn ordered_dither_agrees_exhaustively_at_three_settings() {
     agree("dither", &cfgs, &sc);
 }
 
-#[test]
-fn log_adder_agrees_at_three_settings() {
-    let sc = small_scene();
-    let cfgs = [
+/// The log adder's three vector-testbench settings.
+fn log_settings() -> [(&'static str, HwConfig); 3] {
+    [
         ("log8-logadd", hw("log8-logadd", |_| {})),
         ("log7-logadd", hw("log7-logadd", |_| {})),
         (
@@ -201,8 +200,13 @@ fn log_adder_agrees_at_three_settings() {
                 h.coding.table_addr_bits = 6;
             }),
         ),
-    ];
-    agree("logdomain", &cfgs, &sc);
+    ]
+}
+
+#[test]
+fn log_adder_agrees_at_three_settings() {
+    let sc = small_scene();
+    agree("logdomain", &log_settings(), &sc);
 }
 
 #[test]
@@ -287,19 +291,8 @@ fn log7_fa0() -> HwConfig {
 #[test]
 fn log_adder_agrees_on_every_pair() {
     let sc = small_scene();
-    let cfgs = [
-        ("log8-logadd", hw("log8-logadd", |_| {})),
-        ("log7-logadd", hw("log7-logadd", |_| {})),
-        (
-            "log8-interp-tf2-a6",
-            hw("log8-logadd", |h| {
-                h.coding.interpolate = true;
-                h.coding.table_frac_bits = 2;
-                h.coding.table_addr_bits = 6;
-            }),
-        ),
-        ("log7-fa0", log7_fa0()),
-    ];
+    let mut cfgs = log_settings().to_vec();
+    cfgs.push(("log7-fa0", log7_fa0()));
     let benches: Vec<(&str, Bench)> = cfgs
         .iter()
         .map(|(t, h)| (*t, hdl::vectors("logdomain", &sc, h).expect("bench")))

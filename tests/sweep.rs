@@ -107,7 +107,7 @@ fn bad_grids_and_shards_exit_2_before_any_work() {
     let g = grid_file(&d, "ok.toml", "gamma.dac_bits = [8]\n");
     for (flag, value) in [
         ("--plot", "pareto.gif"),
-        ("--flicker", "0"),
+        ("--flicker", "1"),
         ("--flicker", "65"),
         ("--axes", "flicker,cost"),
         ("--jobs", "0"),

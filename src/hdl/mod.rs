@@ -640,18 +640,24 @@ pub fn run_icarus_tb(tb: &str, module: &str, dir: &Path) -> std::result::Result<
         ));
     }
     let compile_s = t.elapsed().as_secs_f64();
+    let mut vvp = Command::new("vvp");
+    vvp.arg("-n").arg(&sim).current_dir(dir);
+    run_simulation(vvp, "vvp", compile_s)
+}
+
+/// Runs a built simulation (`what` names it in errors), times it and parses its verdict.
+pub(crate) fn run_simulation(
+    mut cmd: Command,
+    what: &str,
+    compile_s: f64,
+) -> std::result::Result<SimRun, String> {
     let t = Instant::now();
-    let r = Command::new("vvp")
-        .arg("-n")
-        .arg(&sim)
-        .current_dir(dir)
-        .output()
-        .map_err(|e| format!("vvp: {e}"))?;
+    let r = cmd.output().map_err(|e| format!("{what}: {e}"))?;
     let sim_s = t.elapsed().as_secs_f64();
     let out = String::from_utf8_lossy(&r.stdout).to_string();
     let verdict = parse_verdict(&out).ok_or_else(|| {
         format!(
-            "no single verdict line in the output: {out}{}",
+            "no single verdict line in the {what} output: {out}{}",
             String::from_utf8_lossy(&r.stderr)
         )
     })?;

@@ -9,7 +9,7 @@
 //! simulator runs in the bench directory (it reads `vectors.hex` and the ROM files there)
 //! and prints the same verdict line as under Icarus ([`super::parse_verdict`]).
 
-use super::{SimRun, Verdict, models_dir, parse_verdict};
+use super::{SimRun, Verdict, models_dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -237,24 +237,13 @@ pub fn run_verilator_tb(
     let t = Instant::now();
     let b = build(tb, module, dir, cache)?;
     let compile_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let r = Command::new(&b.binary)
-        .current_dir(dir)
-        .output()
-        .map_err(|e| format!("{}: {e}", b.binary.display()))?;
-    let sim_s = t.elapsed().as_secs_f64();
-    let out = String::from_utf8_lossy(&r.stdout).to_string();
-    let verdict = parse_verdict(&out).ok_or_else(|| {
-        format!(
-            "no single verdict line in the Verilator output: {out}{}",
-            String::from_utf8_lossy(&r.stderr)
-        )
-    })?;
-    Ok(SimRun {
-        verdict,
+    let mut sim = Command::new(&b.binary);
+    sim.current_dir(dir);
+    super::run_simulation(
+        sim,
+        &format!("Verilator ({})", b.binary.display()),
         compile_s,
-        sim_s,
-    })
+    )
 }
 
 /// Runs the vector testbench of `module` on the bench in `dir` under Verilator.
