@@ -400,6 +400,38 @@ fn cost_storage_is_exact_and_packs_with_bitvec() {
     assert!(!bad.verified);
     let good = cycles::cost::pack("t", 2, &[5], 10, |r, _| [3, 17][r]);
     assert!(good.verified);
+    // Records wider than 64 bits, 64-bit fields, odd widths: every value fits and reads back.
+    let mut rng = Rng(5);
+    for fields in [
+        vec![64],
+        vec![64, 7, 33],
+        vec![1, 63, 1],
+        vec![13, 24, 11],
+        vec![3],
+    ] {
+        let wb: u64 = fields.iter().map(|&f| f as u64).sum();
+        let vals: Vec<u64> = (0..101 * fields.len())
+            .map(|i| {
+                let f = fields[i % fields.len()];
+                rng.next_u64() >> (64 - f)
+            })
+            .collect();
+        let n = fields.len();
+        let p = cycles::cost::pack("t", 101, &fields, 101 * wb, |r, k| vals[r * n + k]);
+        assert!(p.verified, "{fields:?}");
+        // One value one bit too wide is caught.
+        let last = fields.len() - 1;
+        if fields[last] < 64 {
+            let p = cycles::cost::pack("t", 101, &fields, 101 * wb, |r, k| {
+                if (r, k) == (50, last) {
+                    1 << fields[last]
+                } else {
+                    vals[r * n + k]
+                }
+            });
+            assert!(!p.verified, "{fields:?}");
+        }
+    }
 }
 
 #[test]

@@ -26,6 +26,10 @@ pub struct PackCheck {
 
 /// Packs `words` records of `fields` widths (`get(record, field)`) into a `BitVec` of
 /// exactly `expected_bits` and reads every field back.
+///
+/// The write fills the bit vector's `u64` storage word by word (LSB first, as `Lsb0`); the
+/// read-back goes through `bitvec`'s own bit addressing (`load_le` of each record's span,
+/// split into its fields), so the two sides are independent.
 pub fn pack(
     name: &str,
     words: usize,
@@ -37,23 +41,42 @@ pub fn pack(
     let mut ok =
         (words * wb) as u64 == expected_bits && fields.iter().all(|&f| (1..=64).contains(&f));
     let mut bv: BitVec<u64, Lsb0> = BitVec::repeat(false, expected_bits as usize);
+    let mask = |f: u32| if f == 64 { u64::MAX } else { (1u64 << f) - 1 };
     if ok {
-        let fits = |v: u64, f: u32| f == 64 || v >> f == 0;
-        let mut at = 0;
+        let raw = bv.as_raw_mut_slice();
+        let (mut acc, mut n, mut wi) = (0u128, 0u32, 0usize);
         for r in 0..words {
             for (k, &f) in fields.iter().enumerate() {
                 let v = get(r, k);
-                ok &= fits(v, f);
-                bv[at..at + f as usize].store_le(v);
-                at += f as usize;
+                ok &= v & !mask(f) == 0;
+                // n < 64 and f <= 64: the shifted field fits the 128-bit accumulator.
+                acc |= ((v & mask(f)) as u128) << n;
+                n += f;
+                if n >= 64 {
+                    raw[wi] = acc as u64;
+                    wi += 1;
+                    acc >>= 64;
+                    n -= 64;
+                }
             }
+        }
+        if n > 0 {
+            raw[wi] = acc as u64;
         }
         let mut at = 0;
         for r in 0..words {
-            for (k, &f) in fields.iter().enumerate() {
-                let mask = if f == 64 { u64::MAX } else { (1u64 << f) - 1 };
-                ok &= bv[at..at + f as usize].load_le::<u64>() == get(r, k) & mask;
-                at += f as usize;
+            if wb <= 64 {
+                let mut rec = bv[at..at + wb].load_le::<u64>();
+                for (k, &f) in fields.iter().enumerate() {
+                    ok &= rec & mask(f) == get(r, k) & mask(f);
+                    rec = if f == 64 { 0 } else { rec >> f };
+                }
+                at += wb;
+            } else {
+                for (k, &f) in fields.iter().enumerate() {
+                    ok &= bv[at..at + f as usize].load_le::<u64>() == get(r, k) & mask(f);
+                    at += f as usize;
+                }
             }
         }
     }
