@@ -539,7 +539,7 @@ fn cycles(a: CyclesArgs) -> Result<ExitCode, Error> {
         };
         let file = std::fs::File::create(path).map_err(io)?;
         let fifo: Vec<bool> = (0..cycles::CYCLE_STAGES.len())
-            .map(|i| i != 3 && i != 5)
+            .map(|i| r.workload.has_fifo(i))
             .collect();
         let mut w = VcdWriter::new(std::io::BufWriter::new(file), &fifo, hw.cycles.clock_mhz)
             .map_err(io)?;

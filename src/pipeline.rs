@@ -11,6 +11,7 @@ use crate::fixed::SignalStats;
 use crate::hw::HwConfig;
 use crate::scene::{GuardBand, HostScene, Primitive, Scene, front_end};
 use crate::stage::accumulate::{self, AccParams, AccRef, Frame, Kernel, PointFrags};
+use crate::stage::dof::LayerWork;
 use crate::stage::gamma::{self, GammaLut, GammaSpec};
 use crate::stage::input::{self, QPrim};
 use crate::stage::logdomain::{self, CodingKind};
@@ -778,6 +779,9 @@ pub fn post(
     })
 }
 
+/// The depth-of-field stage's report and its layers as the cycle model sees them.
+type DofRun = (StageReport, Vec<LayerWork>);
+
 /// Phase 3 followed by the depth-of-field stage (which plans itself only for a thin lens).
 fn accumulate_and_dof(
     f: &Front,
@@ -786,9 +790,9 @@ fn accumulate_and_dof(
     hw: &HwConfig,
     opts: RenderOptions,
     dof_reference: bool,
-) -> Result<(Accumulated, Option<StageReport>)> {
+) -> Result<(Accumulated, Option<DofRun>)> {
     let mut a = accumulate_phase(f, g, hw, opts)?;
-    let r_dof = crate::stage::dof::run_stage(
+    let dof = crate::stage::dof::run_stage(
         scene,
         hw,
         &mut a.frame,
@@ -796,7 +800,7 @@ fn accumulate_and_dof(
         opts.stage_local,
         dof_reference,
     )?;
-    Ok((a, r_dof))
+    Ok((a, dof))
 }
 
 /// Runs the whole pipeline, fixed and float, and compares them.
@@ -908,10 +912,11 @@ pub fn early_phases(
             (a, Some(r), None, Some(add))
         }
         (_, r) => {
-            let (a, r_dof) = accumulate_and_dof(&f, &g, scene, hw, opts, dof_reference)?;
-            (a, r, r_dof, None)
+            let (a, dof) = accumulate_and_dof(&f, &g, scene, hw, opts, dof_reference)?;
+            (a, r, dof, None)
         }
     };
+    let (dof, dof_layers) = dof.unzip();
     let workload = crate::cycles::Workload::new(
         g.prim_work.clone(),
         &a.tiles,
@@ -919,6 +924,7 @@ pub fn early_phases(
         f.kernel.size,
         &a.tile_rmw,
         hw.accumulate.frame.format.total_bits(),
+        dof_layers.as_deref().unwrap_or_default(),
     );
     let t = Instant::now();
     let sim = crate::cycles::simulate(&workload, &hw.cycles, None);

@@ -239,7 +239,9 @@ fn vcd_trace_reads_back_to_the_reported_counts() {
     h.cycles = random_timing(&mut rng);
     h.cycles.raster.fifo = 1; // force back-pressure
     let r = run(&s, &h);
-    let fifo: Vec<bool> = (0..CYCLE_STAGES.len()).map(|i| i != 3 && i != 5).collect();
+    let fifo: Vec<bool> = (0..CYCLE_STAGES.len())
+        .map(|i| r.workload.has_fifo(i))
+        .collect();
     let mut w = VcdWriter::new(Vec::new(), &fifo, h.cycles.clock_mhz).unwrap();
     let sim = cycles::simulate(
         &r.workload,
@@ -293,7 +295,10 @@ fn vcd_trace_reads_back_to_the_reported_counts() {
         }
     }
     assert_eq!(last_time, r.report.cycles.total_cycles);
-    for (i, st) in r.report.cycles.stages.iter().enumerate() {
+    // The report lists the planned cycle stages (no dof row for this pinhole scene).
+    assert_eq!(r.report.cycles.stages.len(), CYCLE_STAGES.len() - 1);
+    for st in &r.report.cycles.stages {
+        let i = CYCLE_STAGES.iter().position(|n| *n == st.name).unwrap();
         assert_eq!(counts[i][State::Idle as usize], st.idle, "{} idle", st.name);
         assert_eq!(counts[i][State::Busy as usize], st.busy, "{} busy", st.name);
         assert_eq!(
@@ -335,6 +340,50 @@ fn pinhole_camera_plans_no_dof_stage() {
 }
 
 #[test]
+fn thin_lens_scene_runs_dof_on_the_finished_frame_then_gamma() {
+    let s = Scene::default_scene();
+    let mut h = HwConfig::default_config();
+    let r = run(&s, &h);
+    let c = &r.report.cycles;
+    assert!(c.plan.unmodelled.is_empty(), "{:?}", c.plan.unmodelled);
+    let st = |n: &str| c.stages.iter().find(|s| s.name == n).unwrap().clone();
+    let (acc, dof, gamma) = (st("accumulate"), st("dof"), st("gamma"));
+    // One token per layer with a box; both passes emit one sample per box pixel; two
+    // samples per clock (the h and v port groups of dof_row_mac).
+    let layers = &r.workload.dof;
+    assert!(layers.len() >= 2 && layers.len() as u64 <= work(&r, "dof", "layers"));
+    assert_eq!(dof.tokens, layers.len() as u64);
+    let px: u64 = layers.iter().map(|l| l.pixels).sum();
+    assert_eq!(dof.items, 2 * px);
+    assert_eq!(dof.busy, px);
+    // Depth of field blurs the whole screen, so gamma converts every pixel, row by row.
+    assert_eq!(gamma.items, 640 * 480);
+    assert_eq!(gamma.tokens, 480);
+    assert_eq!(gamma.busy, 640 * 480);
+    // Each starts on the finished frame: no overlap with the stages before it.
+    assert!(dof.starved >= acc.busy, "{dof:?} {acc:?}");
+    assert!(gamma.starved >= dof.busy + acc.busy, "{gamma:?}");
+    assert_eq!(c.total_cycles, dof.busy + dof.starved + dof.idle);
+    assert_eq!(c.bottleneck, "dof");
+    // Twice the lanes, half the busy cycles (each layer rounds up on its own).
+    h.cycles.dof.lanes = 4;
+    let r4 = run(&s, &h);
+    let d4 = r4
+        .report
+        .cycles
+        .stages
+        .iter()
+        .find(|s| s.name == "dof")
+        .unwrap();
+    assert_eq!(
+        d4.busy,
+        layers.iter().map(|l| l.pixels.div_ceil(2)).sum::<u64>()
+    );
+    assert!(r4.report.cycles.total_cycles < c.total_cycles);
+    assert_eq!(r4.dac, r.dac);
+}
+
+#[test]
 fn quarter_screen_scene_simulates_only_that_quarter() {
     // Two triangles covering [0, 60]^2 of a 128x128 screen: the top-left quarter's tiles.
     let objs = tri(
@@ -357,7 +406,8 @@ fn quarter_screen_scene_simulates_only_that_quarter() {
     );
     assert!(c.plan.pixels_simulated <= 64 * 64);
     assert_eq!(c.plan.pixels_simulated, work(&r, "accumulate", "pixels"));
-    assert_eq!(c.stages[5].items, c.plan.pixels_simulated);
+    let gamma = c.stages.iter().find(|s| s.name == "gamma").unwrap();
+    assert_eq!(gamma.items, c.plan.pixels_simulated);
     // Every pixel outside the quarter is background.
     let bg = r.dac[127 * 128 + 127];
     for y in 0..128 {
@@ -446,9 +496,16 @@ fn bad_cycle_fields_name_the_field_and_range() {
         assert_eq!(e.field, field, "{e}");
         assert!(e.to_string().contains("must be"), "{e}");
     }
-    let e = HwConfig::from_toml(&TomlFile::from_text("hw.toml", "[cycles.dof]\nlanes = 2\n"))
+    let e = HwConfig::from_toml(&TomlFile::from_text("hw.toml", "[cycles.dof]\nlanes = 0\n"))
         .unwrap_err();
-    assert!(e.to_string().contains("dof"), "{e}");
+    assert_eq!(e.field, "cycles.dof.lanes", "{e}");
+    // A stage without a cycle model has no timing section.
+    let e = HwConfig::from_toml(&TomlFile::from_text(
+        "hw.toml",
+        "[cycles.dither]\nlanes = 2\n",
+    ))
+    .unwrap_err();
+    assert!(e.to_string().contains("dither"), "{e}");
     let ok = HwConfig::from_toml(&TomlFile::from_text(
         "hw.toml",
         "[cycles]\nclock_mhz = 50.0\n[cycles.raster]\nlanes = 8\nfifo = 3\n",

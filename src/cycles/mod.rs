@@ -48,10 +48,15 @@ pub const CYCLE_STAGES: &[&str] = &[
     "raster",
     "visibility",
     "accumulate",
+    "dof",
     "gamma",
 ];
 /// Index of the first stage of the pixel chain.
 const PIXEL_CHAIN: usize = 4;
+/// Index of the depth-of-field stage (the head of the post chain when a thin lens plans it).
+const DOF: usize = 5;
+/// Index of the gamma stage (the last stage).
+const GAMMA: usize = 6;
 
 /// Timing of one stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -101,6 +106,8 @@ pub struct CyclesCfg {
     pub visibility: StageTiming,
     /// Accumulate (items: MACs).
     pub accumulate: StageTiming,
+    /// Depth of field (items: output samples of the two 1-D passes).
+    pub dof: StageTiming,
     /// Gamma (items: pixels).
     pub gamma: StageTiming,
 }
@@ -108,8 +115,9 @@ pub struct CyclesCfg {
 impl CyclesCfg {
     /// Defaults of the presets: a 100 MHz design with a pipelined divider in setup (one
     /// primitive every 4 clocks), 4 samples per clock in raster and visibility, 16 MACs per
-    /// clock in the filter, one pixel per clock through the gamma LUT, and a frame-memory
-    /// port of four frame words per clock.
+    /// clock in the filter, a tap-parallel depth-of-field row MAC per pass (two output
+    /// samples per clock: one horizontal, one vertical, as `dof_row_mac`), one pixel per clock
+    /// through the gamma LUT, and a frame-memory port of four frame words per clock.
     pub fn default_for(frame_int_bits: u32) -> Self {
         Self {
             clock_mhz: 100.0,
@@ -120,6 +128,7 @@ impl CyclesCfg {
             raster: StageTiming::new(4, 4, 1, 64),
             visibility: StageTiming::new(4, 3, 1, 64),
             accumulate: StageTiming::new(16, 6, 1, 4),
+            dof: StageTiming::new(2, 8, 1, 4),
             gamma: StageTiming::new(1, 2, 1, 4),
         }
     }
@@ -132,6 +141,7 @@ impl CyclesCfg {
             "raster" => &self.raster,
             "visibility" => &self.visibility,
             "accumulate" => &self.accumulate,
+            "dof" => &self.dof,
             "gamma" => &self.gamma,
             _ => return None,
         })
@@ -145,6 +155,7 @@ impl CyclesCfg {
             "raster" => &mut self.raster,
             "visibility" => &mut self.visibility,
             "accumulate" => &mut self.accumulate,
+            "dof" => &mut self.dof,
             "gamma" => &mut self.gamma,
             _ => return None,
         })
@@ -206,6 +217,7 @@ pub struct RawCycles {
     raster: Option<RawTiming>,
     visibility: Option<RawTiming>,
     accumulate: Option<RawTiming>,
+    dof: Option<RawTiming>,
     gamma: Option<RawTiming>,
 }
 
@@ -235,6 +247,7 @@ impl RawCycles {
             ("raster", self.raster),
             ("visibility", self.visibility),
             ("accumulate", self.accumulate),
+            ("dof", self.dof),
             ("gamma", self.gamma),
         ] {
             if let (Some(r), Some(t)) = (raw, c.timing_mut(name)) {
@@ -426,6 +439,10 @@ pub struct Workload {
     pub tiles_total: u64,
     /// Screen pixels.
     pub screen_pixels: u64,
+    /// Screen width, pixels.
+    pub screen_width: u32,
+    /// Depth-of-field tokens (one per layer, in processing order; empty without a thin lens).
+    pub dof: Vec<crate::stage::dof::LayerWork>,
 }
 
 impl Workload {
@@ -438,6 +455,7 @@ impl Workload {
         kernel_size: usize,
         tile_rmw: &[u64],
         frame_bits: u32,
+        dof: &[crate::stage::dof::LayerWork],
     ) -> Self {
         let mut out = Vec::new();
         for (t, &on) in tiles.touched.iter().enumerate() {
@@ -462,7 +480,35 @@ impl Workload {
             tile_size: tiles.size,
             tiles_total: tiles.touched.len() as u64,
             screen_pixels: tiles.width as u64 * tiles.height as u64,
+            screen_width: tiles.width,
+            dof: dof.to_vec(),
         }
+    }
+
+    /// Whether the depth-of-field stage runs (it then owns the pixel stream into gamma).
+    pub fn has_dof(&self) -> bool {
+        !self.dof.is_empty()
+    }
+
+    /// Gamma tokens: the touched tiles' pixels, or with depth of field one token per screen
+    /// row (the layers blur and composite over the whole screen).
+    fn gamma_items(&self) -> Vec<u64> {
+        if self.has_dof() {
+            let w = self.screen_width.max(1) as u64;
+            (0..self.screen_pixels.div_ceil(w))
+                .map(|r| w.min(self.screen_pixels - r * w))
+                .collect()
+        } else {
+            self.tiles.iter().map(|t| t.pixels).collect()
+        }
+    }
+
+    /// Whether stage `i` (order of `CYCLE_STAGES`) has a FIFO to a next stage: not the
+    /// sinks (visibility writes the sample buffer, depth of field the composited frame,
+    /// gamma the display buffer; accumulate writes the frame memory when depth of field
+    /// reads it whole).
+    pub fn has_fifo(&self, i: usize) -> bool {
+        !(i == PIXEL_CHAIN - 1 || i == DOF || i == GAMMA || (i == PIXEL_CHAIN && self.has_dof()))
     }
 
     /// Service cycles of every token at every stage (stage order of `CYCLE_STAGES`), and
@@ -491,9 +537,13 @@ impl Workload {
                 p.iter().map(|w| c.raster.service(w.stepped)).collect(),
                 p.iter().map(|w| c.visibility.service(w.tests)).collect(),
                 acc,
-                self.tiles
+                self.dof
                     .iter()
-                    .map(|t| c.gamma.service(t.pixels))
+                    .map(|l| c.dof.service(2 * l.pixels))
+                    .collect(),
+                self.gamma_items()
+                    .into_iter()
+                    .map(|px| c.gamma.service(px))
                     .collect(),
             ],
             port_bound,
@@ -501,7 +551,7 @@ impl Workload {
     }
 
     /// Work items per stage (what the `lanes` count).
-    pub fn items(&self) -> [u64; 6] {
+    pub fn items(&self) -> [u64; 7] {
         let p = &self.prims;
         [
             p.iter().map(|w| w.vertices as u64).sum(),
@@ -509,7 +559,8 @@ impl Workload {
             p.iter().map(|w| w.stepped).sum(),
             p.iter().map(|w| w.tests).sum(),
             self.tiles.iter().map(|t| t.macs).sum(),
-            self.tiles.iter().map(|t| t.pixels).sum(),
+            self.dof.iter().map(|l| 2 * l.pixels).sum(),
+            self.gamma_items().iter().sum(),
         ]
     }
 }
@@ -624,7 +675,7 @@ pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> S
         .enumerate()
         .map(|(i, (name, service))| {
             let t = c.timing(name).expect("timing");
-            let sink = i == PIXEL_CHAIN - 1 || i == CYCLE_STAGES.len() - 1;
+            let sink = !w.has_fifo(i);
             Sim {
                 service,
                 next: 0,
@@ -637,6 +688,17 @@ pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> S
         })
         .collect();
     let ns = sims.len();
+    // Where each stage takes its tokens from: the previous stage's FIFO, or (chain heads)
+    // nowhere. Without depth of field, gamma reads the accumulate stage's FIFO (tile
+    // tokens); with it, depth of field and then gamma each start on the finished frame.
+    let feeder: Vec<Option<usize>> = (0..ns)
+        .map(|i| match i {
+            0 | PIXEL_CHAIN | DOF => None,
+            GAMMA if w.has_dof() => None,
+            GAMMA => Some(PIXEL_CHAIN),
+            _ => Some(i - 1),
+        })
+        .collect();
     let mut counts = vec![[0u64; 4]; ns];
     let mut fifo_max = vec![0u32; ns];
     let mut states = vec![State::Idle; ns];
@@ -664,10 +726,13 @@ pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> S
             for r in sims[i].pipe.iter_mut() {
                 *r = r.saturating_sub(1);
             }
-            let available = match i {
-                0 => true,
-                PIXEL_CHAIN => sims[..PIXEL_CHAIN].iter().all(Sim::done),
-                _ => sims[i - 1].occ > 0,
+            let available = match (i, feeder[i]) {
+                (_, Some(f)) => sims[f].occ > 0,
+                (0, None) => true,
+                // The pixel chain starts when the geometry chain has drained (the filter
+                // reads resolved samples), depth of field when the frame memory is complete,
+                // gamma after depth of field when the last layer is composited.
+                (_, None) => sims[..i].iter().all(Sim::done),
             };
             let s = &mut sims[i];
             let state = if s.remaining > 0 {
@@ -677,8 +742,8 @@ pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> S
                 if available {
                     s.remaining = s.service[s.next] - 1;
                     s.next += 1;
-                    if i != 0 && i != PIXEL_CHAIN {
-                        sims[i - 1].occ -= 1;
+                    if let Some(f) = feeder[i] {
+                        sims[f].occ -= 1;
                     }
                     State::Busy
                 } else {
@@ -712,6 +777,7 @@ pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> S
         "samples stepped",
         "depth tests",
         "MACs",
+        "pass outputs",
         "pixels",
     ];
     let stages = CYCLE_STAGES
@@ -886,7 +952,13 @@ pub fn report_simulated(
         bounds_hold: lo <= r.total_cycles && r.total_cycles <= hi,
         frame_port_bound_cycles: r.frame_port_bound_cycles,
         throughput: Throughput::new(r.total_cycles, c.clock_mhz, w.screen_pixels, refresh_hz),
-        stages: r.stages.clone(),
+        // A cycle stage the run did not plan (dof for a pinhole camera) has no row.
+        stages: r
+            .stages
+            .iter()
+            .filter(|s| s.tokens > 0 || planned.contains(&s.name))
+            .cloned()
+            .collect(),
         sim: SimSpeed {
             wall_ms: wall * 1e3,
             cycles_per_s: if wall > 0.0 {

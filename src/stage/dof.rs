@@ -437,6 +437,32 @@ pub struct DofWork {
     pub acc_overflows: u64,
 }
 
+/// One layer as the cycle model sees it: the pixels of its box (both passes produce one
+/// output sample per box pixel; a sigma = 0 layer passes its box through) and its taps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct LayerWork {
+    /// Pixels of the layer's box (input widened by M, clipped to the image).
+    pub pixels: u64,
+    /// Mask taps `2M + 1` (1: passed through).
+    pub taps: u32,
+}
+
+/// The layers [`layered_fixed`] processes, in its order, with their boxes.
+pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWork> {
+    plan.layers
+        .iter()
+        .enumerate()
+        .filter_map(|(l, layer)| {
+            let all = plan.background == Some(l);
+            let (x0, y0, x1, y1) = layer_box(width, height, &plan.index, l, layer.m, all)?;
+            Some(LayerWork {
+                pixels: ((x1 - x0) * (y1 - y0)) as u64,
+                taps: 2 * layer.m as u32 + 1,
+            })
+        })
+        .collect()
+}
+
 /// Bounding box (x0, y0, x1, y1 exclusive) of a layer's input, widened by M and clipped.
 fn layer_box(
     w: usize,
@@ -1100,7 +1126,7 @@ pub fn run_stage(
     frame_ref: &mut Vec<f64>,
     stage_local: bool,
     per_pixel: bool,
-) -> crate::error::Result<Option<super::StageReport>> {
+) -> crate::error::Result<Option<(super::StageReport, Vec<LayerWork>)>> {
     use super::ms_since;
     use crate::error::{Error, FileError};
     use std::time::Instant;
@@ -1252,5 +1278,6 @@ pub fn run_stage(
         .push(overflow_signal("dof.acc", p.acc_bits, work.acc_overflows));
     frame.acc = out;
     *frame_ref = new_ref;
-    Ok(Some(r))
+    let layers = layer_work(&plan, w, h);
+    Ok(Some((r, layers)))
 }
