@@ -1,18 +1,8 @@
 //! The `igemu` binary: the README's commands, exit codes and error messages.
 
-use std::process::Command;
+mod common;
 
-fn igemu(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_igemu"))
-        .args(args)
-        .output()
-        .expect("run igemu");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+use common::igemu;
 
 fn tmp(name: &str) -> String {
     let d = std::env::temp_dir().join(format!("igemu-cli-{}", std::process::id()));

@@ -12,7 +12,6 @@ use igemu::stage::dof::{
     DepthImage, DofParams, LayerPlan, LensMap, additive_layered, difference_degree, edge_band,
     layered_f64, layered_fixed, per_pixel_scatter, plan_layers, region_error, taps_f64, taps_fixed,
 };
-use std::process::Command;
 
 const ZF: u32 = 16;
 const FRAME: QFormat = QFormat::new(false, 12, 0);
@@ -517,15 +516,10 @@ fn pinhole_plans_no_dof_stage_thin_lens_does() {
     assert!(d.work["layers"] >= 3);
 }
 
+/// (exit code, stderr) of the binary.
 fn igemu(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_igemu"))
-        .args(args)
-        .output()
-        .expect("run igemu");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
+    let (code, _, err) = common::igemu(args);
+    (code, err)
 }
 
 fn write(name: &str, text: &str) -> String {

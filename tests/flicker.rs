@@ -2,9 +2,12 @@
 //! gamma correction, zero accumulator ripple for the equal-energy filters, a few percent for
 //! the Gaussian; and the `flicker` / `render --banding-out` command lines.
 
+mod common;
+
+use common::igemu;
+
 use igemu::flicker::{FlickerReport, flicker};
 use igemu::hw::{FilterKind, HwConfig};
-use std::process::Command;
 
 fn run(filter: FilterKind, correction: bool, phases: u32) -> FlickerReport {
     let mut hw = HwConfig::default_config();
@@ -52,18 +55,6 @@ fn gaussian_ripples_by_a_few_percent() {
         (1.0..15.0).contains(&p.acc_ripple_pct) && (1.0..15.0).contains(&p.displayed_ripple_pct),
         "{p:?}"
     );
-}
-
-fn igemu(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_igemu"))
-        .args(args)
-        .output()
-        .expect("run igemu");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
 }
 
 #[test]

@@ -2,11 +2,14 @@
 //! (exhaustive over 8-bit code pairs), eq. 15 gamma LUT, chains of additions, hard cases,
 //! ramp contours, the pipeline plan and the CLI's bad-input messages.
 
+mod common;
+
+use common::igemu;
+
 use igemu::compare::DisplayModel;
 use igemu::fixed::Quant;
 use igemu::stage::gamma::GammaSpec;
 use igemu::stage::logdomain::*;
-use std::process::Command;
 
 const K: f64 = 100.0;
 
@@ -313,18 +316,6 @@ fn ramp_contours_count_visible_steps_only() {
     assert!(n > 0);
     // Repeated codes are not steps.
     assert_eq!(ramp_visible_contours(&[5, 5, 5, 5], &d), 0);
-}
-
-fn igemu(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_igemu"))
-        .args(args)
-        .output()
-        .expect("run igemu");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
 }
 
 fn write(name: &str, text: &str) -> String {

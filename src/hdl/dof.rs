@@ -147,14 +147,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     };
     // Scene taps: output samples of both passes spread over every blurred layer's box, the
     // expected values from the pipeline's own call (box coordinates).
-    let img = DepthImage {
-        width: w,
-        height: h,
-        value: &frame.acc,
-        key: &frame.depth,
-        cov: &frame.coverage,
-        n2,
-    };
+    let img = DepthImage::of_frame(frame, &frame.acc, n2);
     // A first run counts the output samples of the blurred layers' boxes.
     let mut outputs = 0usize;
     let _ = layered_fixed_observed(&img, &plan, p, frame_fmt, |lp| outputs += lp.bw * lp.bh);

@@ -318,6 +318,21 @@ pub struct DepthImage<'a, T> {
     pub n2: u32,
 }
 
+impl<'a, T> DepthImage<'a, T> {
+    /// The frame memory's depth and coverage with `value` (fixed frame codes, or the same
+    /// frame as reals) as the values.
+    pub fn of_frame(frame: &'a super::accumulate::Frame, value: &'a [T], n2: u32) -> Self {
+        Self {
+            width: frame.width as usize,
+            height: frame.height as usize,
+            value,
+            key: &frame.depth,
+            cov: &frame.coverage,
+            n2,
+        }
+    }
+}
+
 /// The layer plan: layers far to near and each pixel's layer.
 #[derive(Clone, Debug)]
 pub struct LayerPlan {
@@ -1155,14 +1170,7 @@ pub fn run_stage(
             msg,
         })
     })?;
-    let img = DepthImage {
-        width: w,
-        height: h,
-        value: &frame.acc,
-        key: &frame.depth,
-        cov: &frame.coverage,
-        n2,
-    };
+    let img = DepthImage::of_frame(frame, &frame.acc, n2);
     let (out, work) =
         layered_fixed(&img, &plan, p, frame_fmt).map_err(|(signal, bits)| Error::Overflow {
             signal,
@@ -1173,14 +1181,7 @@ pub fn run_stage(
         })?;
     r.fixed_ms = ms_since(t);
     let accf: Vec<f64> = frame.acc.iter().map(|&v| v as f64).collect();
-    let fimg = DepthImage {
-        width: w,
-        height: h,
-        value: &accf[..],
-        key: &frame.depth,
-        cov: &frame.coverage,
-        n2,
-    };
+    let fimg = DepthImage::of_frame(frame, &accf, n2);
     let white = frame_fmt.max_code() as f64;
     let outf: Vec<f64> = out.iter().map(|&v| v as f64).collect();
     if stage_local {

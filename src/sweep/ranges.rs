@@ -1,7 +1,7 @@
 //! Observed ranges of the instrumented signals and the narrowest formats holding them,
 //! and an export of a configuration's formats as HLS / SystemC typedefs and Verilog parameters.
 
-use crate::fixed::{Overflow, QFormat, Quant, Quantizer, SignalStats};
+use crate::fixed::{Overflow, QFormat, Quantizer, SignalStats};
 use crate::hw::HwConfig;
 use serde::Serialize;
 
@@ -70,18 +70,7 @@ fn range_of(stage: &str, s: &SignalStats) -> SignalRange {
     }
 }
 
-fn ac_quant(q: Quant) -> &'static str {
-    match q {
-        Quant::Trn => "TRN",
-        Quant::TrnZero => "TRN_ZERO",
-        Quant::Rnd => "RND",
-        Quant::RndZero => "RND_ZERO",
-        Quant::RndInf => "RND_INF",
-        Quant::RndMinInf => "RND_MIN_INF",
-        Quant::RndConv => "RND_CONV",
-    }
-}
-
+/// ac_fixed overflow mode (ac_fixed has no ERROR mode: the Rust model raises it, the type wraps).
 fn ac_overflow(o: Overflow) -> &'static str {
     match o {
         Overflow::Wrap | Overflow::Error => "WRAP",
@@ -130,7 +119,7 @@ pub fn export(hw: &HwConfig, lang: Export) -> String {
     for (id, q) in formats(hw) {
         let f = q.format;
         let (w, i) = (f.total_bits(), f.int_bits);
-        let (qm, om) = (ac_quant(q.quant), ac_overflow(q.overflow));
+        let (qm, om) = (q.quant.name(), ac_overflow(q.overflow));
         let line = match lang {
             Export::AcFixed => format!(
                 "typedef ac_fixed<{w}, {i}, {}, AC_{qm}, AC_{om}> {id}_t;  // {f}\n",
