@@ -1,7 +1,7 @@
 //! Accumulate (tent filter, 4x4 samples, 640x480) on the default scene: fixed vs float.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use igemu::hw::HwConfig;
+use igemu::config::HwConfig;
 use igemu::pipeline::{RenderOptions, guard_band, region_of, render};
 use igemu::scene::{Scene, front_end};
 use igemu::stage::accumulate::{self, AccParams, Kernel};

@@ -2,8 +2,8 @@
 //! (the simulator's own speed, as RTL simulators report it).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use igemu::config::HwConfig;
 use igemu::cycles;
-use igemu::hw::HwConfig;
 use igemu::pipeline::{RenderOptions, render};
 use igemu::scene::Scene;
 use std::hint::black_box;

@@ -2,8 +2,9 @@
 //! group, so the ratio reads directly: `copy/u32` is the floor any per-pixel stage pays.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use igemu::config::{DitherCfg, DitherKind};
 use igemu::fixed::Quant;
-use igemu::stage::dither::{Dither, DitherCfg, DitherKind, extended_lut};
+use igemu::stage::dither::{Dither, extended_lut};
 use igemu::stage::gamma::GammaSpec;
 use std::hint::black_box;
 

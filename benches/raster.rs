@@ -1,7 +1,7 @@
 //! Raster (setup + edge walk + interpolation) on the default scene: fixed vs float.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use igemu::hw::HwConfig;
+use igemu::config::HwConfig;
 use igemu::pipeline::{guard_band, region_of};
 use igemu::scene::{Scene, front_end};
 use igemu::stage::input::{self, QPrim};

@@ -27,7 +27,7 @@ fn configs() -> Vec<grid::Config> {
     c
 }
 
-fn one_render(scene: &Scene, hw: &igemu::hw::HwConfig) {
+fn one_render(scene: &Scene, hw: &igemu::config::HwConfig) {
     // As a sweep renders: no stage-local comparisons.
     let r = pipeline::render(scene, hw, RenderOptions { stage_local: false }).expect("render");
     black_box(r.report.end_to_end.codes.max_abs_diff);

@@ -14,9 +14,9 @@
 //! `2 (1/2)^gamma - 1` = -62 % for gamma 2.4 without gamma correction).
 
 use crate::compare::DisplayModel;
+use crate::config::HwConfig;
 use crate::error::Result;
 use crate::files::TomlFile;
-use crate::hw::HwConfig;
 use crate::pipeline::{self, RenderOptions};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -53,7 +53,7 @@ pub struct FlickerReport {
     /// Hardware configuration name.
     pub hardware: String,
     /// Filter.
-    pub filter: crate::hw::FilterKind,
+    pub filter: crate::config::FilterKind,
     /// Whether the gamma LUT corrects the display gamma.
     pub gamma_correction: bool,
     /// Display gamma.

@@ -18,16 +18,17 @@
 
 pub mod calc;
 pub mod compare;
+pub mod config;
 pub mod cycles;
 pub mod error;
 pub mod files;
 pub mod fixed;
 pub mod flicker;
 pub mod hdl;
-pub mod hw;
 pub mod output;
 pub mod perceptual;
 pub mod pipeline;
 pub mod scene;
 pub mod stage;
+pub mod stage_id;
 pub mod sweep;

@@ -2,8 +2,8 @@
 //! 0 ok, 1 a check failed, 2 bad input or error.
 
 use clap::{Args, Parser, Subcommand};
+use igemu::config::HwConfig;
 use igemu::error::{Error, FileError};
-use igemu::hw::HwConfig;
 use igemu::pipeline::{self, Render, RenderOptions, Report};
 use igemu::scene::Scene;
 use igemu::{calc, output};
@@ -527,7 +527,7 @@ fn cycles(a: CyclesArgs) -> Result<ExitCode, Error> {
     let scene = load_scene(a.s.scene.as_deref())?;
     let mut hw = HwConfig::resolve(a.s.hw.as_deref())?;
     if let Some(mhz) = a.clock_mhz {
-        cycles::check_clock(mhz)?;
+        igemu::config::check_clock(mhz).map_err(|m| arg_error("--clock-mhz", m))?;
         hw.cycles.clock_mhz = mhz;
     }
     let r = pipeline::render(&scene, &hw, RenderOptions { stage_local: false })?;
@@ -845,7 +845,7 @@ fn print_report(r: &Report, out: &str) {
 }
 
 fn flicker(a: FlickerArgs) -> Result<ExitCode, Error> {
-    use igemu::hw::FilterKind;
+    use igemu::config::FilterKind;
     if !(2..=64).contains(&a.phases) {
         return Err(arg_error(
             "--phases",

@@ -6,15 +6,16 @@
 //! only the background and takes the background's code, computed once.
 
 use crate::compare::{self, CodeCompare, DisplayModel, WeberCompare};
+use crate::config::CodingKind;
+use crate::config::HwConfig;
 use crate::error::{FileError, Result};
 use crate::fixed::SignalStats;
-use crate::hw::HwConfig;
 use crate::scene::{GuardBand, HostScene, Primitive, Scene, front_end};
 use crate::stage::accumulate::{self, AccParams, AccRef, Frame, Kernel, PointFrags};
 use crate::stage::dof::LayerWork;
 use crate::stage::gamma::{self, GammaLut, GammaSpec};
 use crate::stage::input::{self, QPrim};
-use crate::stage::logdomain::{self, CodingKind};
+use crate::stage::logdomain;
 use crate::stage::raster::{
     self, FPrim, FVertex, Frag, FragF, RasterParams, RasterWork, SampleRegion,
 };
@@ -720,7 +721,7 @@ pub fn post(
         hw.gamma.dac_bits,
         hw.gamma.quant,
     );
-    if hw.dither.kind != crate::stage::dither::DitherKind::None {
+    if hw.dither.kind != crate::config::DitherKind::None {
         let d = crate::stage::dither::post(
             &a.frame.acc,
             &a.frame_ref,

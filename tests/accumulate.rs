@@ -4,8 +4,8 @@
 mod common;
 
 use common::{hw, point, scene, tri};
+use igemu::config::FilterKind;
 use igemu::fixed::{Overflow, QFormat};
-use igemu::hw::FilterKind;
 use igemu::pipeline::{RenderOptions, render};
 use proptest::prelude::*;
 

@@ -6,10 +6,11 @@
 mod common;
 
 use common::{Rng, hw, point, scene, tri};
+use igemu::config::HwConfig;
+use igemu::config::{CyclesCfg, StageTiming};
 use igemu::cycles::vcd::VcdWriter;
-use igemu::cycles::{self, CYCLE_STAGES, CyclesCfg, StageTiming, State};
+use igemu::cycles::{self, CYCLE_STAGES, State};
 use igemu::files::TomlFile;
-use igemu::hw::HwConfig;
 use igemu::pipeline::{self, Render, RenderOptions, render};
 use igemu::scene::{Lens, Scene};
 use igemu::stage::accumulate::{self, AccParams};
@@ -55,8 +56,8 @@ fn random_scene(rng: &mut Rng, w: u32, h: u32, n: usize) -> Scene {
 
 fn random_timing(rng: &mut Rng) -> CyclesCfg {
     let mut c = CyclesCfg::default_for(12);
-    for name in CYCLE_STAGES {
-        let t = c.timing_mut(name).unwrap();
+    for id in igemu::config::TIMED {
+        let t = c.timing_mut(id).unwrap();
         *t = StageTiming {
             lanes: 1 + (rng.next_u64() % 16) as u32,
             latency: (rng.next_u64() % 20) as u32,

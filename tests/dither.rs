@@ -5,13 +5,12 @@
 mod common;
 
 use common::{Rng, hw, scene, tri};
+use igemu::config::HwConfig;
+use igemu::config::{DitherCfg, DitherKind, Placement};
 use igemu::files::TomlFile;
 use igemu::fixed::QFormat;
-use igemu::hw::HwConfig;
 use igemu::pipeline::{RenderOptions, render};
-use igemu::stage::dither::{
-    Dither, DitherCfg, DitherKind, Mask, Placement, ordered_code, ordered_f64, period_mean,
-};
+use igemu::stage::dither::{Dither, Mask, ordered_code, ordered_f64, period_mean};
 
 const KINDS: [DitherKind; 5] = [
     DitherKind::Bayer2,

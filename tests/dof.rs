@@ -4,20 +4,21 @@
 mod common;
 
 use common::Rng;
+use igemu::config::DofCfg;
+use igemu::config::HwConfig;
 use igemu::fixed::{Overflow, QFormat};
-use igemu::hw::HwConfig;
 use igemu::pipeline::{self, RenderOptions};
 use igemu::scene::Scene;
 use igemu::stage::dof::{
-    DepthImage, DofParams, LayerPlan, LensMap, additive_layered, difference_degree, edge_band,
-    layered_f64, layered_fixed, per_pixel_scatter, plan_layers, region_error, taps_f64, taps_fixed,
+    DepthImage, LayerPlan, LensMap, additive_layered, difference_degree, edge_band, layered_f64,
+    layered_fixed, per_pixel_scatter, plan_layers, region_error, taps_f64, taps_fixed,
 };
 
 const ZF: u32 = 16;
 const FRAME: QFormat = QFormat::new(false, 12, 0);
 const WHITE: u32 = 4095;
 
-fn params() -> DofParams {
+fn params() -> DofCfg {
     HwConfig::default_config().dof
 }
 
@@ -65,10 +66,10 @@ impl Img {
             n2: 16,
         }
     }
-    fn plan(&self, p: &DofParams) -> LayerPlan {
+    fn plan(&self, p: &DofCfg) -> LayerPlan {
         plan_layers(&self.k, &self.c, 16, &lens(), p).expect("plan")
     }
-    fn run(&self, p: &DofParams) -> Vec<u32> {
+    fn run(&self, p: &DofCfg) -> Vec<u32> {
         layered_fixed(&self.fixed(), &self.plan(p), p, FRAME)
             .expect("run")
             .0
@@ -112,7 +113,7 @@ fn theorem_additive_layered_within_p_on_random_depth_images() {
         let mut worst = (0.0f64, 0.0f64);
         for _ in 0..4 {
             let img = random_image(&mut rng, 40, 32);
-            let p = DofParams { p: pv, ..params() };
+            let p = DofCfg { p: pv, ..params() };
             let plan = img.plan(&p);
             let vf = img.vf();
             let fi = fimg(&img, &vf);
@@ -158,7 +159,7 @@ fn theorem_on_default_scene_for_several_p_and_composited_departure() {
     };
     let pp = per_pixel_scatter(&img, &lm, hw.dof.k);
     for &pv in &[0.02, 0.05, 0.1, 0.2] {
-        let p = DofParams {
+        let p = DofCfg {
             p: pv,
             ..hw.dof.clone()
         };
@@ -473,7 +474,7 @@ fn hard_case_accumulator_overflow_at_full_white() {
     let (out, work) = layered_fixed(&img.fixed(), &img.plan(&p), &p, FRAME).unwrap();
     assert_eq!(work.acc_overflows + work.line_overflows, 0);
     assert!(out.iter().all(|&v| v == WHITE));
-    let narrow = DofParams {
+    let narrow = DofCfg {
         acc_bits: p.acc_bits - 1,
         ..p.clone()
     };
@@ -481,7 +482,7 @@ fn hard_case_accumulator_overflow_at_full_white() {
     assert!(work_n.acc_overflows > 0);
     let low = out_n.iter().filter(|&&v| v < WHITE).count();
     assert!(low > 0);
-    let err = DofParams {
+    let err = DofCfg {
         overflow: Overflow::Error,
         ..narrow.clone()
     };

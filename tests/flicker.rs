@@ -6,8 +6,8 @@ mod common;
 
 use common::igemu;
 
+use igemu::config::{FilterKind, HwConfig};
 use igemu::flicker::{FlickerReport, flicker};
-use igemu::hw::{FilterKind, HwConfig};
 
 fn run(filter: FilterKind, correction: bool, phases: u32) -> FlickerReport {
     let mut hw = HwConfig::default_config();

@@ -4,7 +4,7 @@
 //! the commit. The host front end uses f64 trigonometry and the LUTs `powf`: the hashes are
 //! those of x86_64 Linux with this toolchain (the CI machine).
 
-use igemu::hw::HwConfig;
+use igemu::config::HwConfig;
 use igemu::pipeline::{RenderOptions, render};
 use igemu::scene::Scene;
 

@@ -7,12 +7,12 @@
 mod common;
 
 use common::{hw, scene, tri};
+use igemu::config::DitherKind;
+use igemu::config::HwConfig;
 use igemu::fixed::{Overflow, QFormat, Quant};
 use igemu::hdl::verilator::Sim;
 use igemu::hdl::{self, Bench, Verdict, exhaustive};
-use igemu::hw::HwConfig;
 use igemu::scene::Scene;
-use igemu::stage::dither::DitherKind;
 use std::path::PathBuf;
 
 fn small_scene() -> Scene {

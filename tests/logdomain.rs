@@ -7,6 +7,7 @@ mod common;
 use common::igemu;
 
 use igemu::compare::DisplayModel;
+use igemu::config::{CodingCfg, CodingKind, DitherKind};
 use igemu::fixed::Quant;
 use igemu::stage::gamma::GammaSpec;
 use igemu::stage::logdomain::*;
@@ -144,7 +145,7 @@ fn adder_hard_cases() {
     assert_eq!(add.add(1, ez + 2), ez + 2);
     assert_eq!(add.sb_lookup(ez + 1), 0);
     // Zero intensity: black samples sum to black (code `off`, L = 0) over a full tent window.
-    let k = igemu::stage::accumulate::Kernel::new(igemu::hw::FilterKind::Tent, 4, 10, 0.5);
+    let k = igemu::stage::accumulate::Kernel::new(igemu::config::FilterKind::Tent, 4, 10, 0.5);
     let mut w = LogWork::default();
     let black = accumulate_pixel(&add, k.w.iter().map(|&w| (0, w)), &mut w);
     assert!(
@@ -401,7 +402,7 @@ fn plan_lists_the_log_stage_only_for_log_coding() {
             "input setup raster visibility logdomain gamma",
         ),
     ] {
-        let hw = igemu::hw::HwConfig::preset(preset).unwrap();
+        let hw = igemu::config::HwConfig::preset(preset).unwrap();
         let r = igemu::pipeline::render(&scene, &hw, opts).unwrap();
         assert_eq!(r.report.plan.stages.join(" "), stages, "{preset}");
         if preset == "log8-logadd" {
@@ -501,14 +502,14 @@ fn cli_widths_scene_validates_by_emulation() {
 
 #[test]
 fn log_add_refuses_depth_of_field_and_dither() {
-    let hw = igemu::hw::HwConfig::preset("log8-logadd").unwrap();
+    let hw = igemu::config::HwConfig::preset("log8-logadd").unwrap();
     let opts = igemu::pipeline::RenderOptions { stage_local: false };
     match igemu::pipeline::render(&igemu::scene::Scene::default_scene(), &hw, opts) {
         Err(e) => assert!(e.to_string().contains("coding.kind"), "{e}"),
         Ok(_) => panic!("a thin-lens scene with log-add must be refused"),
     }
     let mut hw = hw;
-    hw.dither.kind = igemu::stage::dither::DitherKind::Bayer4;
+    hw.dither.kind = DitherKind::Bayer4;
     let (field, _) = hw.validate().unwrap_err();
     assert_eq!(field, "dither.kind");
 }

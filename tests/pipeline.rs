@@ -4,7 +4,7 @@
 mod common;
 
 use common::{Rng, hw, line, point, scene, tri};
-use igemu::hw::{FilterKind, HwConfig};
+use igemu::config::{FilterKind, HwConfig};
 use igemu::pipeline::{Render, RenderOptions, render};
 use igemu::scene::Scene;
 use proptest::prelude::*;

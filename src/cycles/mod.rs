@@ -33,11 +33,11 @@
 pub mod cost;
 pub mod vcd;
 
-use crate::error::FileError;
+use crate::config::CyclesCfg;
 use crate::stage::Region;
 use crate::stage::accumulate::{Kernel, PointFrags};
 use crate::stage::visibility::{BACKGROUND, Samples};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::collections::VecDeque;
 use std::time::Instant;
 
@@ -57,208 +57,6 @@ const PIXEL_CHAIN: usize = 4;
 const DOF: usize = 5;
 /// Index of the gamma stage (the last stage).
 const GAMMA: usize = 6;
-
-/// Timing of one stage.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-pub struct StageTiming {
-    /// Items per clock.
-    pub lanes: u32,
-    /// Cycles from a token's last item to its output.
-    pub latency: u32,
-    /// Initiation interval: clocks between two groups of `lanes` items.
-    pub ii: u32,
-    /// Depth of the FIFO to the next stage, in tokens (unused by a chain's last stage).
-    pub fifo: u32,
-}
-
-impl StageTiming {
-    const fn new(lanes: u32, latency: u32, ii: u32, fifo: u32) -> Self {
-        Self {
-            lanes,
-            latency,
-            ii,
-            fifo,
-        }
-    }
-    /// Cycles to serve `items`.
-    #[inline]
-    pub fn service(&self, items: u64) -> u64 {
-        items.div_ceil(self.lanes as u64).max(1) * self.ii as u64
-    }
-}
-
-/// The `[cycles]` section of the hardware file.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CyclesCfg {
-    /// Clock, MHz (`--clock-mhz` overrides).
-    pub clock_mhz: f64,
-    /// Tile size in pixels (square) of the plan's touched-tile map.
-    pub tile: u32,
-    /// Frame-memory port width, bits per clock.
-    pub frame_port_bits: u32,
-    /// Input quantisation (items: vertices).
-    pub input: StageTiming,
-    /// Setup (items: primitives).
-    pub setup: StageTiming,
-    /// Raster (items: sample positions stepped).
-    pub raster: StageTiming,
-    /// Visibility (items: depth tests).
-    pub visibility: StageTiming,
-    /// Accumulate (items: MACs).
-    pub accumulate: StageTiming,
-    /// Depth of field (items: output samples of the two 1-D passes).
-    pub dof: StageTiming,
-    /// Gamma (items: pixels).
-    pub gamma: StageTiming,
-}
-
-impl CyclesCfg {
-    /// Defaults of the presets: a 100 MHz design with a pipelined divider in setup (one
-    /// primitive every 4 clocks), 4 samples per clock in raster and visibility, 16 MACs per
-    /// clock in the filter, a tap-parallel depth-of-field row MAC per pass (two output
-    /// samples per clock: one horizontal, one vertical, as `dof_row_mac`), one pixel per clock
-    /// through the gamma LUT, and a frame-memory port of four frame words per clock.
-    pub fn default_for(frame_int_bits: u32) -> Self {
-        Self {
-            clock_mhz: 100.0,
-            tile: 16,
-            frame_port_bits: 4 * frame_int_bits,
-            input: StageTiming::new(1, 4, 1, 16),
-            setup: StageTiming::new(1, 16, 4, 16),
-            raster: StageTiming::new(4, 4, 1, 64),
-            visibility: StageTiming::new(4, 3, 1, 64),
-            accumulate: StageTiming::new(16, 6, 1, 4),
-            dof: StageTiming::new(2, 8, 1, 4),
-            gamma: StageTiming::new(1, 2, 1, 4),
-        }
-    }
-
-    /// Timing of a stage by name.
-    pub fn timing(&self, name: &str) -> Option<&StageTiming> {
-        Some(match name {
-            "input" => &self.input,
-            "setup" => &self.setup,
-            "raster" => &self.raster,
-            "visibility" => &self.visibility,
-            "accumulate" => &self.accumulate,
-            "dof" => &self.dof,
-            "gamma" => &self.gamma,
-            _ => return None,
-        })
-    }
-
-    /// Mutable timing of a stage by name.
-    pub fn timing_mut(&mut self, name: &str) -> Option<&mut StageTiming> {
-        Some(match name {
-            "input" => &mut self.input,
-            "setup" => &mut self.setup,
-            "raster" => &mut self.raster,
-            "visibility" => &mut self.visibility,
-            "accumulate" => &mut self.accumulate,
-            "dof" => &mut self.dof,
-            "gamma" => &mut self.gamma,
-            _ => return None,
-        })
-    }
-
-    /// Checks the ranges; returns the failing field and a message.
-    pub fn validate(&self) -> Result<(), (String, String)> {
-        let err = |f: &str, m: String| Err((format!("cycles.{f}"), m));
-        if !(self.clock_mhz.is_finite() && self.clock_mhz > 0.0 && self.clock_mhz <= 10_000.0) {
-            return err(
-                "clock_mhz",
-                format!("must be in (0, 10000] MHz, got {}", self.clock_mhz),
-            );
-        }
-        if !(self.tile.is_power_of_two() && (4..=256).contains(&self.tile)) {
-            return err(
-                "tile",
-                format!(
-                    "must be a power of two in 4..=256 pixels, got {}",
-                    self.tile
-                ),
-            );
-        }
-        if !(1..=4096).contains(&self.frame_port_bits) {
-            return err(
-                "frame_port_bits",
-                format!("must be in 1..=4096, got {}", self.frame_port_bits),
-            );
-        }
-        for name in CYCLE_STAGES {
-            let t = self.timing(name).expect("every cycle stage has a timing");
-            for (field, v, lo, hi) in [
-                ("lanes", t.lanes, 1, 1024),
-                ("latency", t.latency, 0, 1024),
-                ("ii", t.ii, 1, 64),
-                ("fifo", t.fifo, 1, 65536),
-            ] {
-                if !(lo..=hi).contains(&v) {
-                    return err(
-                        &format!("{name}.{field}"),
-                        format!("must be in {lo}..={hi}, got {v}"),
-                    );
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-/// `[cycles]` as written in the hardware file (every field optional).
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RawCycles {
-    clock_mhz: Option<f64>,
-    tile: Option<u32>,
-    frame_port_bits: Option<u32>,
-    input: Option<RawTiming>,
-    setup: Option<RawTiming>,
-    raster: Option<RawTiming>,
-    visibility: Option<RawTiming>,
-    accumulate: Option<RawTiming>,
-    dof: Option<RawTiming>,
-    gamma: Option<RawTiming>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawTiming {
-    lanes: Option<u32>,
-    latency: Option<u32>,
-    ii: Option<u32>,
-    fifo: Option<u32>,
-}
-
-impl RawCycles {
-    /// Overrides the given fields of `c`.
-    pub fn apply(self, c: &mut CyclesCfg) {
-        fn set<T>(d: &mut T, v: Option<T>) {
-            if let Some(v) = v {
-                *d = v;
-            }
-        }
-        set(&mut c.clock_mhz, self.clock_mhz);
-        set(&mut c.tile, self.tile);
-        set(&mut c.frame_port_bits, self.frame_port_bits);
-        for (name, raw) in [
-            ("input", self.input),
-            ("setup", self.setup),
-            ("raster", self.raster),
-            ("visibility", self.visibility),
-            ("accumulate", self.accumulate),
-            ("dof", self.dof),
-            ("gamma", self.gamma),
-        ] {
-            if let (Some(r), Some(t)) = (raw, c.timing_mut(name)) {
-                set(&mut t.lanes, r.lanes);
-                set(&mut t.latency, r.latency);
-                set(&mut t.ii, r.ii);
-                set(&mut t.fifo, r.fifo);
-            }
-        }
-    }
-}
 
 /// The plan's touched-tile map: square tiles of `size` pixels over the screen.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -674,7 +472,9 @@ pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> S
         .zip(services)
         .enumerate()
         .map(|(i, (name, service))| {
-            let t = c.timing(name).expect("timing");
+            let t = c
+                .timing(crate::stage_id::StageId::parse(name).expect("a stage"))
+                .expect("timing");
             let sink = !w.has_fifo(i);
             Sim {
                 service,
@@ -784,7 +584,9 @@ pub fn simulate(w: &Workload, c: &CyclesCfg, mut trace: Option<&mut Trace>) -> S
         .iter()
         .enumerate()
         .map(|(i, name)| {
-            let tm = c.timing(name).expect("timing");
+            let tm = c
+                .timing(crate::stage_id::StageId::parse(name).expect("a stage"))
+                .expect("timing");
             StageCycles {
                 name: name.to_string(),
                 item: item_names[i].into(),
@@ -936,7 +738,11 @@ pub fn report_simulated(
             stages: planned.to_vec(),
             unmodelled: planned
                 .iter()
-                .filter(|s| c.timing(s).is_none())
+                .filter(|s| {
+                    crate::stage_id::StageId::parse(s)
+                        .and_then(|i| c.timing(i))
+                        .is_none()
+                })
                 .cloned()
                 .collect(),
             tile: w.tile_size,
@@ -968,20 +774,5 @@ pub fn report_simulated(
             },
         },
         cost,
-    }
-}
-
-/// Error for a bad `--clock-mhz`.
-pub fn check_clock(mhz: f64) -> Result<(), FileError> {
-    if mhz.is_finite() && mhz > 0.0 && mhz <= 10_000.0 {
-        Ok(())
-    } else {
-        Err(FileError {
-            file: "--clock-mhz".into(),
-            line: None,
-            col: None,
-            field: String::new(),
-            msg: format!("must be in (0, 10000] MHz, got {mhz}"),
-        })
     }
 }

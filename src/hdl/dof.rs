@@ -10,8 +10,8 @@
 //! values the module must ignore.
 
 use super::{Bench, RANDOM, Rng, TAPS, bad};
+use crate::config::HwConfig;
 use crate::error::{Error, FileError, Result};
-use crate::hw::HwConfig;
 use crate::pipeline::{self, RenderOptions};
 use crate::scene::Scene;
 use crate::stage::dof::{

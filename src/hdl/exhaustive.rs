@@ -8,11 +8,12 @@
 //! ordinary vector testbench.
 
 use super::Bench;
+use crate::config::CodingKind;
+use crate::config::HwConfig;
 use crate::error::Result;
-use crate::hw::HwConfig;
 use crate::pipeline;
 use crate::scene::Scene;
-use crate::stage::logdomain::{CodingKind, LogAdder, log_code};
+use crate::stage::logdomain::{LogAdder, log_code};
 
 /// The exhaustive testbench of the log adder.
 pub const TESTBENCH: &str = "tb_log_adder_exhaustive";

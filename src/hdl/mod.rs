@@ -9,15 +9,15 @@
 //! with `$readmemh`. The testbench prints exactly one verdict line,
 //! `TESTBENCH OK <n> vectors` or `TESTBENCH FAILED: ...`.
 
+use crate::config::CodingKind;
+use crate::config::HwConfig;
 use crate::error::{Error, FileError, Result};
-use crate::hw::HwConfig;
 use crate::pipeline::{self, RenderOptions};
 use crate::scene::Scene;
 use crate::stage::accumulate::AccParams;
 use crate::stage::dither::{Mask, extended_lut, ordered_code};
 use crate::stage::gamma::{GammaLut, GammaSpec};
 use crate::stage::input::QPrim;
-use crate::stage::logdomain::CodingKind;
 use crate::stage::setup::Edge;
 use std::fmt::Write as _;
 use std::hint::black_box;

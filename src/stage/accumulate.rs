@@ -18,9 +18,9 @@
 use super::raster::SampleRegion;
 use super::visibility::{BACKGROUND, Samples};
 use super::{Cost, Region, Unit};
+use crate::config::FilterKind;
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, SignalStats, round_shift_i64};
-use crate::hw::FilterKind;
 use rayon::prelude::*;
 
 /// A quantised filter kernel over the `size x size` samples of one pixel's window.

@@ -49,6 +49,7 @@
 //! spread with its layer's middle mask, summed, no compositing.
 
 use super::{Cost, LocalError, Unit};
+use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
 use crate::fixed::{Overflow, QFormat, Quant, SignalStats, round_shift};
 use crate::scene::{Camera, Lens, screen_z};
 use serde::Serialize;
@@ -57,33 +58,6 @@ use serde::Serialize;
 pub const SIGMA_FRAC: u32 = 8;
 /// Fraction bits of the slope constant G (pixels per unit of screen z).
 pub const G_FRAC: u32 = 16;
-/// Largest configurable mask half-size M (pixels): a `(2M+1)`-tap line.
-pub const MAX_HALF_SIZE_LIMIT: u32 = 64;
-
-/// Parameters of the dof stage (hardware `[dof]`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct DofParams {
-    /// Difference-degree threshold P of a layer, in (0, 1).
-    pub p: f64,
-    /// Mask cut ratio k (edge / centre), in (0, 1).
-    pub k: f64,
-    /// Fraction bits of the 1-D mask coefficients (UQ0.f; they sum to 2^f).
-    pub coef_bits: u32,
-    /// Fraction bits of the compositing alpha.
-    pub alpha_bits: u32,
-    /// Guard fraction bits of the layer colour and the composite.
-    pub guard_bits: u32,
-    /// Width of the line-buffer word (horizontal-pass sum of `x * m`).
-    pub line_bits: u32,
-    /// Width of the vertical-pass accumulator.
-    pub acc_bits: u32,
-    /// Largest mask half-size M the hardware holds.
-    pub max_half_size: u32,
-    /// Rounding of the composite to the frame format.
-    pub quant: Quant,
-    /// Overflow of the line buffer and accumulator (SAT or ERROR).
-    pub overflow: Overflow,
-}
 
 /// The thin-lens blur as a function of the depth code: `sigma = G (z - z_e)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -350,7 +324,7 @@ pub fn plan_layers(
     cov: &[u16],
     n2: u32,
     lens: &LensMap,
-    p: &DofParams,
+    p: &DofCfg,
 ) -> Result<LayerPlan, String> {
     let mut keys: Vec<u32> = key.to_vec();
     if cov.iter().any(|&c| (c as u32) < n2) {
@@ -615,7 +589,7 @@ fn share(plan: &LayerPlan, img_key: u32, cov: u16, idx: u16, l: usize, n2: u32) 
 pub fn layered_fixed(
     img: &DepthImage<u32>,
     plan: &LayerPlan,
-    p: &DofParams,
+    p: &DofCfg,
     frame_fmt: QFormat,
 ) -> Result<(Vec<u32>, DofWork), (String, u32)> {
     layered_fixed_observed(img, plan, p, frame_fmt, |_| {})
@@ -626,7 +600,7 @@ pub fn layered_fixed(
 pub fn layered_fixed_observed(
     img: &DepthImage<u32>,
     plan: &LayerPlan,
-    p: &DofParams,
+    p: &DofCfg,
     frame_fmt: QFormat,
     mut observe: impl FnMut(&LayerPlanes),
 ) -> Result<(Vec<u32>, DofWork), (String, u32)> {
@@ -994,7 +968,7 @@ pub fn local_error(fixed: &[u32], float: &[f64], max: f64) -> LocalError {
 /// coefficient ROM and the arithmetic units by width.
 pub fn cost(
     plan: &LayerPlan,
-    p: &DofParams,
+    p: &DofCfg,
     width: u64,
     height: u64,
     code_bits: u32,
@@ -1055,69 +1029,6 @@ pub fn overflow_signal(name: &str, bits: u32, n: u64) -> SignalStats {
     s
 }
 
-/// Checks the `[dof]` fields; returns the failing field and the allowed range.
-pub fn validate(p: &DofParams) -> Result<(), (String, String)> {
-    let err = |f: &str, m: String| Err((format!("dof.{f}"), m));
-    if !(p.p.is_finite() && p.p > 0.0 && p.p < 1.0) {
-        return err(
-            "p",
-            format!(
-                "must be in (0, 1) (the layer difference-degree threshold), got {}",
-                p.p
-            ),
-        );
-    }
-    if !(p.k.is_finite() && p.k > 0.0 && p.k < 1.0) {
-        return err(
-            "k",
-            format!("must be in (0, 1) (mask edge/centre ratio), got {}", p.k),
-        );
-    }
-    if !(4..=20).contains(&p.coef_bits) {
-        return err(
-            "coef_bits",
-            format!("must be in 4..=20, got {}", p.coef_bits),
-        );
-    }
-    if !(4..=24).contains(&p.alpha_bits) {
-        return err(
-            "alpha_bits",
-            format!("must be in 4..=24, got {}", p.alpha_bits),
-        );
-    }
-    if p.guard_bits > 16 {
-        return err(
-            "guard_bits",
-            format!("must be in 0..=16, got {}", p.guard_bits),
-        );
-    }
-    if !(8..=64).contains(&p.line_bits) {
-        return err(
-            "line_bits",
-            format!("must be in 8..=64, got {}", p.line_bits),
-        );
-    }
-    if !(8..=96).contains(&p.acc_bits) {
-        return err("acc_bits", format!("must be in 8..=96, got {}", p.acc_bits));
-    }
-    if !(1..=MAX_HALF_SIZE_LIMIT).contains(&p.max_half_size) {
-        return err(
-            "max_half_size",
-            format!(
-                "must be in 1..={MAX_HALF_SIZE_LIMIT} pixels, got {}",
-                p.max_half_size
-            ),
-        );
-    }
-    if !matches!(p.overflow, Overflow::Sat | Overflow::Error) {
-        return err(
-            "overflow",
-            format!("must be SAT or ERROR, got {:?}", p.overflow),
-        );
-    }
-    Ok(())
-}
-
 /// Weber error of linear frame intensities through the display (the gamma LUT makes the
 /// displayed luminance linear in the frame code: `B = B_min + (B_max - B_min) v / white`).
 pub fn weber_linear(
@@ -1136,7 +1047,7 @@ pub fn weber_linear(
 /// `per_pixel` also runs the per-pixel scatter reference and the theorem check.
 pub fn run_stage(
     scene: &crate::scene::Scene,
-    hw: &crate::hw::HwConfig,
+    hw: &crate::config::HwConfig,
     frame: &mut super::accumulate::Frame,
     frame_ref: &mut Vec<f64>,
     stage_local: bool,

@@ -6,9 +6,9 @@
 //! The float reference of this stage is the host's value itself.
 
 use super::{Cost, LocalError, StageReport, Unit};
+use crate::config::HwConfig;
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, SignalStats};
-use crate::hw::HwConfig;
 use crate::scene::{HostScene, Primitive, ScreenVertex};
 
 /// A quantised vertex: raw codes.

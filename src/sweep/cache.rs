@@ -12,8 +12,8 @@
 //! a sample buffer), shared read-only: a render borrows them, so results are identical to
 //! an uncached render.
 
+use crate::config::HwConfig;
 use crate::error::Result;
-use crate::hw::HwConfig;
 use crate::pipeline::{Early, RenderOptions};
 use crate::scene::Scene;
 use std::sync::{Arc, Mutex};

@@ -12,9 +12,9 @@
 //! by [`HwConfig::from_toml`], so a grid accepts exactly the fields and ranges a hardware
 //! file accepts, and a bad value is reported before any render starts.
 
+use crate::config::HwConfig;
 use crate::error::FileError;
 use crate::files::TomlFile;
-use crate::hw::HwConfig;
 use std::collections::BTreeMap;
 
 /// One point of the grid: field path -> value, plus the validated hardware.

@@ -94,7 +94,7 @@ pub struct FlickerMetrics {
 
 impl FlickerMetrics {
     /// Runs the flicker sweep of `hw`.
-    pub fn of(hw: &crate::hw::HwConfig, phases: u32) -> Result<FlickerMetrics> {
+    pub fn of(hw: &crate::config::HwConfig, phases: u32) -> Result<FlickerMetrics> {
         let r = crate::flicker::flicker(hw, phases)?;
         let max = |f: fn(&crate::flicker::ObjectFlicker) -> f64| {
             r.objects.iter().map(f).fold(0.0, f64::max)

@@ -1,8 +1,8 @@
 //! Observed ranges of the instrumented signals and the narrowest formats holding them,
 //! and an export of a configuration's formats as HLS / SystemC typedefs and Verilog parameters.
 
+use crate::config::HwConfig;
 use crate::fixed::{Overflow, QFormat, Quantizer, SignalStats};
-use crate::hw::HwConfig;
 use serde::Serialize;
 
 /// One signal's observed range.

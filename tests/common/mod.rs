@@ -1,8 +1,8 @@
 //! Shared helpers of the integration tests: scenes built from TOML text, seeded randomness.
 #![allow(dead_code)]
 
+use igemu::config::HwConfig;
 use igemu::files::TomlFile;
-use igemu::hw::HwConfig;
 use igemu::scene::Scene;
 
 /// A scene with a pinhole camera and the given `[[object]]` blocks.

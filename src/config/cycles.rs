@@ -1,0 +1,221 @@
+//! `[cycles]`: the clock, the tile size of the plan, the frame-memory port and the timing
+//! (lanes, latency, initiation interval, FIFO depth) of every stage with a cycle model
+//! (docs/cycles.md).
+
+use super::set;
+use crate::stage_id::StageId;
+use serde::{Deserialize, Serialize};
+
+/// Timing of one stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct StageTiming {
+    /// Items per clock.
+    pub lanes: u32,
+    /// Cycles from a token's last item to its output.
+    pub latency: u32,
+    /// Initiation interval: clocks between two groups of `lanes` items.
+    pub ii: u32,
+    /// Depth of the FIFO to the next stage, in tokens (unused by a chain's last stage).
+    pub fifo: u32,
+}
+
+impl StageTiming {
+    const fn new(lanes: u32, latency: u32, ii: u32, fifo: u32) -> Self {
+        Self {
+            lanes,
+            latency,
+            ii,
+            fifo,
+        }
+    }
+    /// Cycles to serve `items`.
+    #[inline]
+    pub fn service(&self, items: u64) -> u64 {
+        items.div_ceil(self.lanes as u64).max(1) * self.ii as u64
+    }
+}
+
+/// The `[cycles]` section of the hardware file.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CyclesCfg {
+    /// Clock, MHz (`--clock-mhz` overrides).
+    pub clock_mhz: f64,
+    /// Tile size in pixels (square) of the plan's tile map.
+    pub tile: u32,
+    /// Frame-memory port width, bits per clock.
+    pub frame_port_bits: u32,
+    /// Input quantisation (items: vertices).
+    pub input: StageTiming,
+    /// Setup (items: primitives).
+    pub setup: StageTiming,
+    /// Raster (items: sample positions stepped).
+    pub raster: StageTiming,
+    /// Visibility (items: depth tests).
+    pub visibility: StageTiming,
+    /// Accumulate (items: MACs).
+    pub accumulate: StageTiming,
+    /// Depth of field (items: output samples of the two 1-D passes).
+    pub dof: StageTiming,
+    /// Gamma (items: pixels).
+    pub gamma: StageTiming,
+}
+
+/// The stages with a `[cycles.<stage>]` timing table, in flow order.
+pub const TIMED: [StageId; 7] = [
+    StageId::Input,
+    StageId::Setup,
+    StageId::Raster,
+    StageId::Visibility,
+    StageId::Accumulate,
+    StageId::Dof,
+    StageId::Gamma,
+];
+
+impl CyclesCfg {
+    /// Defaults of the presets: a 100 MHz design with a pipelined divider in setup (one
+    /// primitive every 4 clocks), 4 samples per clock in raster and visibility, 16 MACs per
+    /// clock in the filter, a tap-parallel depth-of-field row MAC per pass (two output
+    /// samples per clock: one horizontal, one vertical, as `dof_row_mac`), one pixel per clock
+    /// through the gamma LUT, and a frame-memory port of four frame words per clock.
+    pub fn default_for(frame_int_bits: u32) -> Self {
+        Self {
+            clock_mhz: 100.0,
+            tile: 16,
+            frame_port_bits: 4 * frame_int_bits,
+            input: StageTiming::new(1, 4, 1, 16),
+            setup: StageTiming::new(1, 16, 4, 16),
+            raster: StageTiming::new(4, 4, 1, 64),
+            visibility: StageTiming::new(4, 3, 1, 64),
+            accumulate: StageTiming::new(16, 6, 1, 4),
+            dof: StageTiming::new(2, 8, 1, 4),
+            gamma: StageTiming::new(1, 2, 1, 4),
+        }
+    }
+
+    /// The timing of a stage (`None`: the stage has no cycle model).
+    pub fn timing(&self, id: StageId) -> Option<&StageTiming> {
+        Some(match id {
+            StageId::Input => &self.input,
+            StageId::Setup => &self.setup,
+            StageId::Raster => &self.raster,
+            StageId::Visibility => &self.visibility,
+            StageId::Accumulate => &self.accumulate,
+            StageId::Dof => &self.dof,
+            StageId::Gamma => &self.gamma,
+            StageId::Logdomain | StageId::Dither => return None,
+        })
+    }
+
+    /// Mutable timing of a stage.
+    pub fn timing_mut(&mut self, id: StageId) -> Option<&mut StageTiming> {
+        Some(match id {
+            StageId::Input => &mut self.input,
+            StageId::Setup => &mut self.setup,
+            StageId::Raster => &mut self.raster,
+            StageId::Visibility => &mut self.visibility,
+            StageId::Accumulate => &mut self.accumulate,
+            StageId::Dof => &mut self.dof,
+            StageId::Gamma => &mut self.gamma,
+            StageId::Logdomain | StageId::Dither => return None,
+        })
+    }
+
+    /// Checks the ranges; returns the failing field and a message.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let err = |f: &str, m: String| Err((format!("cycles.{f}"), m));
+        if let Err(m) = check_clock(self.clock_mhz) {
+            return err("clock_mhz", m);
+        }
+        if !(self.tile.is_power_of_two() && (4..=256).contains(&self.tile)) {
+            return err(
+                "tile",
+                format!(
+                    "must be a power of two in 4..=256 pixels, got {}",
+                    self.tile
+                ),
+            );
+        }
+        if !(1..=4096).contains(&self.frame_port_bits) {
+            return err(
+                "frame_port_bits",
+                format!("must be in 1..=4096, got {}", self.frame_port_bits),
+            );
+        }
+        for id in TIMED {
+            let t = self.timing(id).expect("every timed stage has a timing");
+            for (field, v, lo, hi) in [
+                ("lanes", t.lanes, 1, 1024),
+                ("latency", t.latency, 0, 1024),
+                ("ii", t.ii, 1, 64),
+                ("fifo", t.fifo, 1, 65536),
+            ] {
+                if !(lo..=hi).contains(&v) {
+                    return err(
+                        &format!("{id}.{field}"),
+                        format!("must be in {lo}..={hi}, got {v}"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks a clock frequency (`cycles.clock_mhz`, `--clock-mhz`).
+pub fn check_clock(mhz: f64) -> Result<(), String> {
+    if mhz.is_finite() && mhz > 0.0 && mhz <= 10_000.0 {
+        Ok(())
+    } else {
+        Err(format!("must be in (0, 10000] MHz, got {mhz}"))
+    }
+}
+
+/// `[cycles]` as written in the hardware file (every field optional).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCycles {
+    clock_mhz: Option<f64>,
+    tile: Option<u32>,
+    frame_port_bits: Option<u32>,
+    input: Option<RawTiming>,
+    setup: Option<RawTiming>,
+    raster: Option<RawTiming>,
+    visibility: Option<RawTiming>,
+    accumulate: Option<RawTiming>,
+    dof: Option<RawTiming>,
+    gamma: Option<RawTiming>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTiming {
+    lanes: Option<u32>,
+    latency: Option<u32>,
+    ii: Option<u32>,
+    fifo: Option<u32>,
+}
+
+impl RawCycles {
+    /// Overrides the given fields of `c`.
+    pub(super) fn apply(self, c: &mut CyclesCfg) {
+        set(&mut c.clock_mhz, self.clock_mhz);
+        set(&mut c.tile, self.tile);
+        set(&mut c.frame_port_bits, self.frame_port_bits);
+        for (id, raw) in [
+            (StageId::Input, self.input),
+            (StageId::Setup, self.setup),
+            (StageId::Raster, self.raster),
+            (StageId::Visibility, self.visibility),
+            (StageId::Accumulate, self.accumulate),
+            (StageId::Dof, self.dof),
+            (StageId::Gamma, self.gamma),
+        ] {
+            if let (Some(r), Some(t)) = (raw, c.timing_mut(id)) {
+                set(&mut t.lanes, r.lanes);
+                set(&mut t.latency, r.latency);
+                set(&mut t.ii, r.ii);
+                set(&mut t.fifo, r.fifo);
+            }
+        }
+    }
+}

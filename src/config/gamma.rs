@@ -1,0 +1,62 @@
+//! `[gamma]`: the gamma-correction LUT and the DAC.
+
+use super::set;
+use crate::fixed::Quant;
+use serde::{Deserialize, Serialize};
+
+/// Gamma-correction LUT.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GammaCfg {
+    /// DAC width in bits.
+    pub dac_bits: u32,
+    /// Rounding used when the LUT is built from the formula (and at the reference DAC).
+    pub quant: Quant,
+    /// Gamma the LUT corrects; `None` takes the scene's display gamma.
+    pub gamma: Option<f64>,
+    /// `false` models a system without gamma correction (a linear LUT).
+    pub correction: bool,
+}
+
+/// `[gamma]` as written in the hardware file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawGamma {
+    dac_bits: Option<u32>,
+    quant: Option<Quant>,
+    gamma: Option<f64>,
+    correction: Option<bool>,
+}
+
+impl RawGamma {
+    /// Overrides the given fields.
+    pub(super) fn apply(self, c: &mut GammaCfg) {
+        set(&mut c.dac_bits, self.dac_bits);
+        set(&mut c.quant, self.quant);
+        if self.gamma.is_some() {
+            c.gamma = self.gamma;
+        }
+        set(&mut c.correction, self.correction);
+    }
+}
+
+impl GammaCfg {
+    /// Checks the ranges; returns the failing field and a message.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let d = self.dac_bits;
+        if !(1..=16).contains(&d) {
+            return Err((
+                "gamma.dac_bits".into(),
+                format!("must be in 1..=16, got {d}"),
+            ));
+        }
+        if let Some(g) = self.gamma
+            && !(g.is_finite() && g > 0.0 && g <= 5.0)
+        {
+            return Err((
+                "gamma.gamma".into(),
+                format!("must be a finite number in (0, 5], got {g}"),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,263 @@
+//! The hardware configuration: formats, modes and structure of every stage, one section per
+//! stage (and `[cycles]` for the timing), the presets, the TOML overlay and the validation.
+//!
+//! A config starts from a preset (`linear12` unless the file names another) and the file
+//! overrides single fields. Every field is validated; errors name the file, the line, the
+//! field and the allowed range.
+//!
+//! This module sits below the stages: it imports nothing from `stage`, `pipeline`,
+//! `cycles`, `sweep` or `hdl` (docs/STRUCTURE.md).
+
+mod accumulate;
+mod coding;
+mod cycles;
+mod dither;
+mod dof;
+mod gamma;
+mod input;
+mod overlay;
+mod presets;
+mod raster;
+mod visibility;
+
+pub use accumulate::{AccumulateCfg, FilterKind};
+pub use coding::{
+    ACC_FRAC_BITS, CodingCfg, CodingKind, MAX_LOG_BITS, MIN_LOG_BITS, TABLE_ADDR_BITS,
+    TABLE_FRAC_BITS,
+};
+pub use cycles::{CyclesCfg, StageTiming, TIMED, check_clock};
+pub use dither::{DitherCfg, DitherKind, Placement};
+pub use dof::{DofCfg, MAX_HALF_SIZE_LIMIT};
+pub use gamma::GammaCfg;
+pub use input::InputCfg;
+pub use presets::PRESETS;
+pub use raster::{MAX_GUARD_BAND, RasterCfg};
+pub use visibility::VisibilityCfg;
+
+use crate::error::FileError;
+use crate::files::TomlFile;
+use crate::fixed::QFormat;
+use serde::Serialize;
+
+/// Largest gamma-LUT address width (the accumulator width): a 2^20-entry ROM.
+pub const MAX_LUT_ADDRESS_BITS: u32 = 20;
+
+/// The whole hardware configuration.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HwConfig {
+    /// Preset or file name.
+    pub name: String,
+    /// Input quantisation.
+    pub input: InputCfg,
+    /// Setup and raster.
+    pub raster: RasterCfg,
+    /// Z-buffer.
+    pub visibility: VisibilityCfg,
+    /// Filter and accumulation.
+    pub accumulate: AccumulateCfg,
+    /// Gamma LUT.
+    pub gamma: GammaCfg,
+    /// Timing of the stages for the cycle model (`[cycles]`).
+    pub cycles: CyclesCfg,
+    /// Dither (kind `none` plans no dither stage).
+    pub dither: DitherCfg,
+    /// Depth of field (used only with a thin-lens camera).
+    pub dof: DofCfg,
+    /// Intensity coding of the stored samples and the frame memory (linear or log).
+    pub coding: CodingCfg,
+}
+
+/// Overrides `dst` when `v` is given (the overlay's one operation).
+pub(crate) fn set<T>(dst: &mut T, v: Option<T>) {
+    if let Some(v) = v {
+        *dst = v;
+    }
+}
+
+impl HwConfig {
+    /// A preset by name.
+    pub fn preset(name: &str) -> Option<HwConfig> {
+        presets::preset(name)
+    }
+
+    /// The default configuration (`linear12`).
+    pub fn default_config() -> HwConfig {
+        Self::preset(PRESETS[0]).expect("the first preset exists")
+    }
+
+    /// Resolves `--hw` values: a preset name or a TOML file path.
+    pub fn resolve(arg: Option<&str>) -> Result<HwConfig, FileError> {
+        match arg {
+            None => Ok(Self::default_config()),
+            Some(a) => match Self::preset(a) {
+                Some(p) => Ok(p),
+                None if a.ends_with(".toml") || std::path::Path::new(a).exists() => {
+                    Self::from_toml(&TomlFile::read(a)?)
+                }
+                None => Err(FileError {
+                    file: "--hw".into(),
+                    line: None,
+                    col: None,
+                    field: String::new(),
+                    msg: format!(
+                        "`{a}` is neither a preset ({}) nor a .toml file",
+                        PRESETS.join(", ")
+                    ),
+                }),
+            },
+        }
+    }
+
+    /// Parses and validates a hardware file.
+    pub fn from_toml(file: &TomlFile) -> Result<HwConfig, FileError> {
+        let hw = overlay::apply_file(file)?;
+        hw.validate()
+            .map_err(|(field, msg)| file.error(&field, msg))?;
+        Ok(hw)
+    }
+
+    /// A section as JSON, by its name in the file (`"accumulate"`, `"dof"`, ...): the key
+    /// material of the stages that read it.
+    pub fn section(&self, name: &str) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).unwrap_or_default();
+        v.get_mut(name)
+            .map(serde_json::Value::take)
+            .unwrap_or_default()
+    }
+
+    /// Checks every field; returns the failing field path and a message with the allowed range.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let fmt = |field: &str, f: &QFormat| f.validate().map_err(|m| (field.to_string(), m));
+        fmt("input.coord", &self.input.coord.format)?;
+        fmt("input.z", &self.input.z.format)?;
+        fmt("input.intensity", &self.input.intensity.format)?;
+        fmt("visibility.z", &self.visibility.z.format)?;
+        fmt("accumulate.frame", &self.accumulate.frame.format)?;
+        let err = |field: &str, msg: String| Err((field.to_string(), msg));
+        let c = &self.input.coord.format;
+        if !c.signed {
+            return err(
+                "input.coord",
+                format!("must be signed (Q...), got {c}: the guard band extends left of x = 0"),
+            );
+        }
+        let n = self.raster.samples;
+        if !matches!(n, 1 | 2 | 4 | 8) {
+            return err(
+                "raster.samples",
+                format!("must be 1, 2, 4 or 8 (an n x n grid), got {n}"),
+            );
+        }
+        let need_sub = n.trailing_zeros() + 1;
+        if c.frac_bits < need_sub {
+            return err(
+                "input.coord",
+                format!(
+                    "has {} sub-pixel bits; a {n}x{n} sample grid needs at least {need_sub} (sample centres must fall on the coordinate grid)",
+                    c.frac_bits
+                ),
+            );
+        }
+        if c.frac_bits > 12 {
+            return err(
+                "input.coord",
+                format!(
+                    "sub-pixel bits must be in {need_sub}..=12, got {}",
+                    c.frac_bits
+                ),
+            );
+        }
+        if self.raster.interp_guard_bits > 24 {
+            return err(
+                "raster.interp_guard_bits",
+                format!("must be in 0..=24, got {}", self.raster.interp_guard_bits),
+            );
+        }
+        if self.raster.guard_band > MAX_GUARD_BAND {
+            return err(
+                "raster.guard_band",
+                format!(
+                    "must be in 0..={MAX_GUARD_BAND} pixels, got {}",
+                    self.raster.guard_band
+                ),
+            );
+        }
+        for (field, f) in [
+            ("input.z", &self.input.z.format),
+            ("visibility.z", &self.visibility.z.format),
+        ] {
+            if f.signed || f.int_bits != 0 {
+                return err(field, format!("must be UQ0.n (depth in [0,1)), got {f}"));
+            }
+        }
+        if self.visibility.z.format.frac_bits > self.input.z.format.frac_bits {
+            return err(
+                "visibility.z",
+                format!(
+                    "{} is wider than the interpolated depth {}",
+                    self.visibility.z.format, self.input.z.format
+                ),
+            );
+        }
+        let acc = &self.accumulate.frame.format;
+        let int = &self.input.intensity.format;
+        if acc.signed || int.signed {
+            return err(
+                "accumulate.frame",
+                format!("intensity codes are unsigned (UQ), got {acc} and {int}"),
+            );
+        }
+        if acc.int_bits == 0 || acc.int_bits > MAX_LUT_ADDRESS_BITS {
+            return err(
+                "accumulate.frame",
+                format!(
+                    "integer bits (the gamma LUT address) must be in 1..={MAX_LUT_ADDRESS_BITS}, got {}",
+                    acc.int_bits
+                ),
+            );
+        }
+        if int.int_bits != acc.int_bits {
+            return err(
+                "input.intensity",
+                format!(
+                    "must have the accumulator's integer bits ({}) so full white is the same code, got {int}",
+                    acc.int_bits
+                ),
+            );
+        }
+        let wb = self.accumulate.weight_bits;
+        let min_wb = 2 * n.trailing_zeros();
+        if wb < min_wb || wb > 16 {
+            return err(
+                "accumulate.weight_bits",
+                format!(
+                    "must be in {min_wb}..=16 for a {n}x{n} grid (each sample's share 2^w/n^2 must be an integer), got {wb}"
+                ),
+            );
+        }
+        let s = self.accumulate.gaussian_sigma;
+        if !(s.is_finite() && (0.1..=2.0).contains(&s)) {
+            return err(
+                "accumulate.gaussian_sigma",
+                format!("must be a finite number in 0.1..=2.0 pixels, got {s}"),
+            );
+        }
+        self.gamma.validate()?;
+        self.cycles.validate()?;
+        self.dither.validate(acc.int_bits, self.gamma.dac_bits)?;
+        self.dof.validate()?;
+        self.coding.validate()?;
+        if self.coding.kind == CodingKind::LogAdd && self.dither.kind != DitherKind::None {
+            return err(
+                "dither.kind",
+                "dithering is modelled after the linear gamma LUT only; with coding.kind = \"log-add\" use kind = \"none\" (or log-potentiate)".into(),
+            );
+        }
+        Ok(())
+    }
+
+    /// Sub-pixel bits of the vertex coordinates.
+    pub fn subpixel_bits(&self) -> u32 {
+        self.input.coord.format.frac_bits
+    }
+}
