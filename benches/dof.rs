@@ -3,7 +3,6 @@
 //! printed from one run (`cargo bench --bench dof`).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use igemu::config::DofCfg;
 use igemu::config::HwConfig;
 use igemu::pipeline::{self, RenderOptions};
 use igemu::scene::Scene;
