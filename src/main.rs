@@ -930,7 +930,23 @@ fn hdl_vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
             "only the log adder (--stage logdomain) has an exhaustive testbench".into(),
         ));
     }
-    let b = hdl::vectors(&a.stage, &scene, &hw)?;
+    let stage = igemu::stage_id::StageId::parse(&a.stage)
+        .filter(|&s| hdl::module_of(s).is_some())
+        .ok_or_else(|| {
+            arg_error(
+                "--stage",
+                format!(
+                    "no HDL model of stage `{}`; allowed: {}",
+                    a.stage,
+                    hdl::MODULES
+                        .iter()
+                        .map(|m| m.0.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?;
+    let b = hdl::vectors(stage, &scene, &hw)?;
     let dir = std::path::Path::new(&a.out);
     b.write(dir)?;
     let src: Vec<String> = b.sources.iter().map(|(k, n)| format!("{n} {k}")).collect();
@@ -1055,8 +1071,10 @@ fn cost(a: CostArgs) -> Result<ExitCode, Error> {
         let c = &st.cost;
         let adders: u32 = c.adders.iter().map(|u| u.count).sum();
         let mults: u32 = c.multipliers.iter().map(|u| u.count).sum();
-        let synth = match hdl::module_of(&st.name) {
-            Some(m) if a.synth => match hdl::vectors(&st.name, &scene, &hw) {
+        let model = igemu::stage_id::StageId::parse(&st.name)
+            .and_then(|id| Some((id, hdl::module_of(id)?)));
+        let synth = match model {
+            Some((id, m)) if a.synth => match hdl::vectors(id, &scene, &hw) {
                 Ok(b) => match hdl::synth::synth(&b, &cache) {
                     Ok(s) => format!(
                         "{m}: {} cells ({} FF){}",
@@ -1068,7 +1086,7 @@ fn cost(a: CostArgs) -> Result<ExitCode, Error> {
                 },
                 Err(e) => format!("{m}: {e}"),
             },
-            Some(m) => format!("{m} (use --synth)"),
+            Some((_, m)) => format!("{m} (use --synth)"),
             None => "-".into(),
         };
         println!(
