@@ -201,3 +201,39 @@ fn bad_scene_files_name_line_and_field() {
     );
     expect_error(&["render", &p], &["far.toml:8", "far"]);
 }
+
+#[test]
+fn a_bad_choice_names_the_value_and_the_choices_and_exits_2() {
+    // The stages with an HDL model, in flow order (the CLI derives them from StageId::ALL).
+    let stages: Vec<&str> = igemu::stage_id::StageId::ALL
+        .into_iter()
+        .filter(|&s| igemu::hdl::module_of(s).is_some())
+        .map(|s| s.name())
+        .collect();
+    let stages = stages.join(", ");
+    assert!(
+        stages.contains("gamma") && !stages.contains("raster"),
+        "{stages}"
+    );
+    let out = tmp("hdl-bad");
+    for stage in ["raster", "nope"] {
+        expect_error(
+            &["hdl", "vectors", "--stage", stage, "--out", &out],
+            &["--stage", stage, &stages],
+        );
+    }
+    expect_error(
+        &[
+            "hdl", "vectors", "--stage", "gamma", "--out", &out, "--sim", "ghdl",
+        ],
+        &["--sim", "ghdl", "icarus, verilator"],
+    );
+    expect_error(
+        &["ranges", "--export", "vhdl"],
+        &["--export", "vhdl", "ac_fixed, ap_fixed, systemc, verilog"],
+    );
+    expect_error(
+        &["flicker", "--filter", "sinc"],
+        &["--filter", "sinc", "box, tent, gaussian"],
+    );
+}

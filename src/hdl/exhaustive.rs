@@ -14,6 +14,7 @@ use crate::error::Result;
 use crate::pipeline;
 use crate::scene::Scene;
 use crate::stage::logdomain::{LogAdder, log_code};
+use crate::stage_id::StageId;
 
 /// The exhaustive testbench of the log adder.
 pub const TESTBENCH: &str = "tb_log_adder_exhaustive";
@@ -61,7 +62,7 @@ pub fn failed_row(msg: &str) -> Option<i64> {
 /// The log adder's bench with its vectors replaced by row `a`: `(a, b, s(a, b))` for every
 /// `b`, for the ordinary vector testbench, which names the first pair that differs.
 pub fn row_bench(scene: &Scene, hw: &HwConfig, a: i64) -> Result<Bench> {
-    let mut b = super::vectors("logdomain", scene, hw)?;
+    let mut b = super::vectors(StageId::Logdomain, scene, hw)?;
     let add = log_adder_of(scene, hw)?;
     let rows = 1i64 << add.frame_bits();
     b.vectors = (0..rows)

@@ -64,7 +64,7 @@ impl Sim {
         cache: &Path,
     ) -> std::result::Result<SimRun, String> {
         match self {
-            Sim::Icarus => super::run_icarus_tb(tb, module, dir),
+            Sim::Icarus => super::icarus::run_icarus_tb(tb, module, dir),
             Sim::Verilator => run_verilator_tb(tb, module, dir, cache),
         }
     }
@@ -239,7 +239,7 @@ pub fn run_verilator_tb(
     let compile_s = t.elapsed().as_secs_f64();
     let mut sim = Command::new(&b.binary);
     sim.current_dir(dir);
-    super::run_simulation(
+    super::icarus::run_simulation(
         sim,
         &format!("Verilator ({})", b.binary.display()),
         compile_s,

@@ -9,9 +9,10 @@
 //! sample `t` sits at line position `pos + t - HALF`; samples off the line hold random
 //! values the module must ignore.
 
-use super::{Bench, RANDOM, Rng, TAPS, bad};
+use super::{RANDOM, TAPS, bad};
 use crate::config::HwConfig;
 use crate::error::{Error, FileError, Result};
+use crate::hdl::bench::{Bench, Rng};
 use crate::pipeline::{self, RenderOptions};
 use crate::scene::Scene;
 use crate::stage::dof::{

@@ -1,0 +1,145 @@
+//! Argument types shared by several commands: the scene and hardware arguments
+//! ([`SceneArgs`]) and the clap value enums of the choices (`--stage`, `--sim`, `--export`,
+//! `--filter`), plus the error that names a bad flag.
+
+use clap::builder::PossibleValue;
+use clap::{Args, ValueEnum};
+use igemu::config::{FilterKind, HwConfig};
+use igemu::error::{Error, FileError};
+use igemu::hdl::verilator::Sim;
+use igemu::pipeline::{self, Render, RenderOptions};
+use igemu::scene::Scene;
+use igemu::stage_id::StageId;
+use igemu::sweep::ranges::Export;
+use std::sync::LazyLock;
+
+#[derive(Args)]
+pub struct SceneArgs {
+    /// Scene TOML file or embedded scene name (default: the embedded default scene).
+    pub scene: Option<String>,
+    /// Hardware config: a preset (linear12, linear11, linear8, log8-potentiate, log8-logadd, log7-logadd) or a TOML file.
+    #[arg(long)]
+    pub hw: Option<String>,
+}
+
+impl SceneArgs {
+    /// The scene.
+    pub fn scene(&self) -> Result<Scene, Error> {
+        load_scene(self.scene.as_deref())
+    }
+
+    /// The hardware config.
+    pub fn hw(&self) -> Result<HwConfig, Error> {
+        Ok(HwConfig::resolve(self.hw.as_deref())?)
+    }
+
+    /// Renders the scene on the hardware.
+    pub fn render(&self, opts: RenderOptions) -> Result<Render, Error> {
+        let scene = self.scene()?;
+        let hw = self.hw()?;
+        pipeline::render(&scene, &hw, opts)
+    }
+}
+
+/// A scene: the default scene, an embedded scene name (unless a file of that name exists)
+/// or a TOML file.
+pub fn load_scene(arg: Option<&str>) -> Result<Scene, Error> {
+    match arg {
+        None => Ok(Scene::default_scene()),
+        Some(a) => match Scene::embedded(a) {
+            Some(s) if !std::path::Path::new(a).exists() => Ok(s),
+            _ => Ok(Scene::load(a)?),
+        },
+    }
+}
+
+/// An error naming a flag (or a command) and what is wrong with it.
+pub fn arg_error(flag: &str, msg: String) -> Error {
+    Error::File(FileError {
+        file: flag.into(),
+        line: None,
+        col: None,
+        field: String::new(),
+        msg,
+    })
+}
+
+/// A stage with an HDL model (`hdl vectors --stage`): the choices are the stages of
+/// [`StageId::ALL`] that [`igemu::hdl::module_of`] knows, in flow order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StageArg(pub StageId);
+
+impl ValueEnum for StageArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        static WITH_MODEL: LazyLock<Vec<StageArg>> = LazyLock::new(|| {
+            StageId::ALL
+                .into_iter()
+                .filter(|&s| igemu::hdl::module_of(s).is_some())
+                .map(StageArg)
+                .collect()
+        });
+        &WITH_MODEL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        igemu::hdl::module_of(self.0).map(|_| PossibleValue::new(self.0.name()))
+    }
+}
+
+/// A Verilog simulator (`hdl vectors --sim`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SimArg {
+    Icarus,
+    Verilator,
+}
+
+impl From<SimArg> for Sim {
+    fn from(s: SimArg) -> Sim {
+        match s {
+            SimArg::Icarus => Sim::Icarus,
+            SimArg::Verilator => Sim::Verilator,
+        }
+    }
+}
+
+/// A typedef language of `ranges --export`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ExportArg {
+    #[value(name = "ac_fixed")]
+    AcFixed,
+    #[value(name = "ap_fixed")]
+    ApFixed,
+    #[value(name = "systemc")]
+    SystemC,
+    #[value(name = "verilog")]
+    Verilog,
+}
+
+impl From<ExportArg> for Export {
+    fn from(e: ExportArg) -> Export {
+        match e {
+            ExportArg::AcFixed => Export::AcFixed,
+            ExportArg::ApFixed => Export::ApFixed,
+            ExportArg::SystemC => Export::SystemC,
+            ExportArg::Verilog => Export::Verilog,
+        }
+    }
+}
+
+/// A reconstruction filter (`flicker --filter`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FilterArg {
+    Box,
+    Tent,
+    Gaussian,
+}
+
+impl From<FilterArg> for FilterKind {
+    fn from(f: FilterArg) -> FilterKind {
+        match f {
+            FilterArg::Box => FilterKind::Box,
+            FilterArg::Tent => FilterKind::Tent,
+            FilterArg::Gaussian => FilterKind::Gaussian,
+        }
+    }
+}

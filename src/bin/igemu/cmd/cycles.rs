@@ -1,0 +1,80 @@
+//! `igemu cycles`: cycle-count a frame on the scene's real workload, optionally writing a
+//! VCD trace of the stage states and FIFO occupancy.
+
+use crate::args::{SceneArgs, arg_error};
+use crate::print::print_cycles;
+use clap::Args;
+use igemu::error::Error;
+use igemu::pipeline::{self, RenderOptions};
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct CyclesArgs {
+    #[command(flatten)]
+    pub s: SceneArgs,
+    /// Clock frequency in MHz (default: the hardware file's cycles.clock_mhz).
+    #[arg(long)]
+    pub clock_mhz: Option<f64>,
+    /// Write a VCD trace of stage states and FIFO occupancy (for GTKWave).
+    #[arg(long)]
+    pub vcd: Option<String>,
+    /// Print the cycle report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `igemu cycles`; returns the exit code.
+pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
+    use igemu::cycles::{self, vcd::VcdWriter};
+    let scene = a.s.scene()?;
+    let mut hw = a.s.hw()?;
+    if let Some(mhz) = a.clock_mhz {
+        igemu::config::check_clock(mhz).map_err(|m| arg_error("--clock-mhz", m))?;
+        hw.cycles.clock_mhz = mhz;
+    }
+    let r = pipeline::render(&scene, &hw, RenderOptions { stage_local: false })?;
+    let mut c = r.report.cycles.clone();
+    if let Some(path) = &a.vcd {
+        let io = |e: std::io::Error| Error::Io {
+            path: path.clone(),
+            source: e,
+        };
+        let file = std::fs::File::create(path).map_err(io)?;
+        let fifo: Vec<bool> = (0..cycles::CYCLE_STAGES.len())
+            .map(|i| r.workload.has_fifo(i))
+            .collect();
+        let mut w = VcdWriter::new(std::io::BufWriter::new(file), &fifo, hw.cycles.clock_mhz)
+            .map_err(io)?;
+        let planned = c.plan.stages.clone();
+        let cost = c.cost.clone();
+        c = cycles::report(
+            &r.workload,
+            &hw.cycles,
+            &planned,
+            scene.display.refresh_hz,
+            cost,
+            Some(&mut |t, st: &[cycles::State], occ: &[u32]| w.cycle(t, st, occ)),
+        );
+        w.finish(c.total_cycles).map_err(io)?;
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&c).expect("serialisable")
+        );
+    } else {
+        println!(
+            "igemu {} cycles | scene `{}` {}x{} | hardware `{}`",
+            r.report.igemu_version,
+            r.report.scene.name,
+            r.report.scene.width,
+            r.report.scene.height,
+            r.report.hardware.name
+        );
+        print_cycles(&c);
+        if let Some(p) = &a.vcd {
+            println!("wrote {p}");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,157 @@
+//! `igemu hdl vectors`: write a stage's HDL vectors, ROM files and `params.vh`, and with
+//! `--run` run its self-checking testbench under Icarus Verilog or Verilator (with
+//! `--exhaustive`, the log adder's full pair space).
+
+use crate::args::{SceneArgs, SimArg, StageArg, arg_error};
+use clap::{Args, Subcommand};
+use igemu::config::HwConfig;
+use igemu::error::Error;
+use igemu::hdl::verilator::Sim;
+use igemu::hdl::{self, Bench, Verdict, exhaustive};
+use igemu::scene::Scene;
+use igemu::stage_id::StageId;
+use std::path::Path;
+use std::process::ExitCode;
+
+#[derive(Subcommand)]
+pub enum HdlCmd {
+    /// Write a stage's vectors (scene taps, exhaustive, random), ROM files and params.vh to a directory.
+    Vectors(HdlVectorsArgs),
+}
+
+#[derive(Args)]
+pub struct HdlVectorsArgs {
+    /// Stage with an HDL model (logdomain: log-add hardware; setup: the edge stepper; dof: a thin-lens scene).
+    #[arg(long, value_enum)]
+    pub stage: StageArg,
+    #[command(flatten)]
+    pub s: SceneArgs,
+    /// Output directory.
+    #[arg(long)]
+    pub out: String,
+    /// Also run the testbench (under --sim; exit 1 when it fails).
+    #[arg(long)]
+    pub run: bool,
+    /// Simulator for --run (Verilator builds cached in target/hdl-verilator).
+    #[arg(long, value_enum, default_value_t = SimArg::Icarus)]
+    pub sim: SimArg,
+    /// With --run, stage logdomain: the full pair space (tb_log_adder_exhaustive, one
+    /// signature per row); a failing row is then run pair by pair to name the pair.
+    #[arg(long, requires = "run")]
+    pub exhaustive: bool,
+}
+
+/// Runs an `hdl` subcommand.
+pub fn run(c: HdlCmd) -> Result<ExitCode, Error> {
+    match c {
+        HdlCmd::Vectors(a) => vectors(a),
+    }
+}
+
+fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
+    let scene = a.s.scene()?;
+    let hw = a.s.hw()?;
+    let sim = Sim::from(a.sim);
+    if a.exhaustive && a.stage.0 != StageId::Logdomain {
+        return Err(arg_error(
+            "--exhaustive",
+            "only the log adder (--stage logdomain) has an exhaustive testbench".into(),
+        ));
+    }
+    let b = hdl::vectors(a.stage.0, &scene, &hw)?;
+    let dir = Path::new(&a.out);
+    b.write(dir)?;
+    let src: Vec<String> = b.sources.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    println!(
+        "hdl vectors | stage {} (module {}) | hardware `{}` | {} vectors ({}) | {}",
+        b.stage,
+        b.module,
+        hw.name,
+        b.vectors.len(),
+        src.join(", "),
+        dir.display()
+    );
+    let params: Vec<String> = b.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    println!("parameters: {}", params.join(" "));
+    if !a.run {
+        return Ok(ExitCode::SUCCESS);
+    }
+    let cache = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("hdl-verilator");
+    if a.exhaustive {
+        return run_exhaustive(sim, &b, dir, &cache, &scene, &hw);
+    }
+    let tb = format!("tb_{}", b.module);
+    let r = sim
+        .run(&tb, b.module, dir, &cache)
+        .map_err(|m| arg_error("--run", m))?;
+    match r.verdict {
+        Verdict::Ok(n) => {
+            let rust = n as f64 / (b.model_ns.max(1) as f64 * 1e-9);
+            let sim_rate = n as f64 / r.sim_s;
+            println!(
+                "{}: TESTBENCH OK {n} vectors | compile {:.2} s, simulate {:.3} s = {sim_rate:.0} vectors/s | Rust model {:.3} ms = {rust:.0} vectors/s | Rust / Verilog = {:.0}x",
+                sim.name(),
+                r.compile_s,
+                r.sim_s,
+                b.model_ns as f64 * 1e-6,
+                rust / sim_rate
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Verdict::Failed(m) => {
+            println!("{}: TESTBENCH FAILED: {m}", sim.name());
+            Ok(ExitCode::from(1))
+        }
+    }
+}
+
+/// `hdl vectors --stage logdomain --run --exhaustive`: the full pair space by row
+/// signatures; a failing row is then run pair by pair with the vector testbench.
+fn run_exhaustive(
+    sim: Sim,
+    b: &Bench,
+    dir: &Path,
+    cache: &Path,
+    scene: &Scene,
+    hw: &HwConfig,
+) -> Result<ExitCode, Error> {
+    let r = sim
+        .run(exhaustive::TESTBENCH, b.module, dir, cache)
+        .map_err(|m| arg_error("--run", m))?;
+    match r.verdict {
+        Verdict::Ok(n) => {
+            println!(
+                "{}: {}: TESTBENCH OK {n} vectors (every pair) | compile {:.2} s, simulate {:.2} s = {:.0} vectors/s",
+                sim.name(),
+                exhaustive::TESTBENCH,
+                r.compile_s,
+                r.sim_s,
+                n as f64 / r.sim_s
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Verdict::Failed(m) => {
+            println!(
+                "{}: {}: TESTBENCH FAILED: {m}",
+                sim.name(),
+                exhaustive::TESTBENCH
+            );
+            if let Some(row) = exhaustive::failed_row(&m) {
+                let rb = exhaustive::row_bench(scene, hw, row)?;
+                let rdir = dir.join(format!("row-{row}"));
+                rb.write(&rdir)?;
+                let rr = sim
+                    .run(&format!("tb_{}", rb.module), rb.module, &rdir, cache)
+                    .map_err(|m| arg_error("--run", m))?;
+                let v = match rr.verdict {
+                    Verdict::Ok(n) => format!("TESTBENCH OK {n} vectors"),
+                    Verdict::Failed(m) => format!("TESTBENCH FAILED: {m}"),
+                };
+                println!("row a={row} pair by pair ({}): {v}", rdir.display());
+            }
+            Ok(ExitCode::from(1))
+        }
+    }
+}

@@ -1,0 +1,57 @@
+//! `igemu ranges`: the observed min/max per signal and the narrowest format holding it, or
+//! with `--export` the configuration's formats as ac_fixed, ap_fixed, SystemC or Verilog.
+
+use crate::args::{ExportArg, SceneArgs};
+use clap::Args;
+use igemu::error::Error;
+use igemu::pipeline::RenderOptions;
+use igemu::sweep::ranges;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct RangesArgs {
+    #[command(flatten)]
+    pub s: SceneArgs,
+    /// Print the configuration's formats as ac_fixed, ap_fixed, systemc or verilog instead.
+    #[arg(long, value_enum)]
+    pub export: Option<ExportArg>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `igemu ranges`; returns the exit code.
+pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
+    if let Some(e) = a.export {
+        let hw = a.s.hw()?;
+        print!("{}", ranges::export(&hw, e.into()));
+        return Ok(ExitCode::SUCCESS);
+    }
+    let r = a.s.render(RenderOptions { stage_local: false })?;
+    let rows = ranges::ranges(&r.report.stages);
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).expect("serialisable")
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+        "stage", "signal", "format", "min (LSB)", "max (LSB)", "narrowest", "overflows"
+    );
+    for s in rows {
+        let opt = |v: Option<i128>| v.map_or("-".to_string(), |v| v.to_string());
+        println!(
+            "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+            s.stage,
+            s.signal,
+            s.format,
+            opt(s.min),
+            opt(s.max),
+            s.narrowest.unwrap_or_else(|| "-".into()),
+            s.overflows
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

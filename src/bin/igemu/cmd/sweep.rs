@@ -1,0 +1,168 @@
+//! `igemu sweep`: render every configuration of a word-width grid on the scenes, one JSON
+//! line each (resumable, shardable, parallel), and print the Pareto front.
+
+use crate::args::{arg_error, load_scene};
+use clap::Args;
+use igemu::error::Error;
+use igemu::pipeline;
+use igemu::scene::Scene;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct SweepArgs {
+    /// Scene TOML files or embedded scene names (default: the embedded default scene).
+    pub scenes: Vec<String>,
+    /// Grid TOML: dotted hardware fields with lists of values (`gamma.dac_bits = [8, 9]`, `preset = [...]`).
+    #[arg(long)]
+    pub grid: String,
+    /// Output JSON-lines file (one row per configuration and scene).
+    #[arg(long)]
+    pub out: String,
+    /// Keep the complete rows already in OUT and run only the missing configurations.
+    #[arg(long)]
+    pub resume: bool,
+    /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Configurations rendered in parallel (1 = serial; results are identical).
+    #[arg(long, default_value_t = 1)]
+    pub jobs: usize,
+    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker).
+    #[arg(long, default_value = "error,cost")]
+    pub axes: String,
+    /// Run every phase for every configuration (no stage reuse between configurations).
+    #[arg(long)]
+    pub no_reuse: bool,
+    /// Plot error vs cost and error vs throughput with the Pareto fronts (SVG or PNG, by extension).
+    #[arg(long, value_name = "PARETO.svg|png")]
+    pub plot: Option<String>,
+    /// Add small-object flicker metrics to every row: the flicker scene swept over PHASES x PHASES sub-pixel phases (2..=64; `igemu flicker` uses 32).
+    #[arg(long, value_name = "PHASES")]
+    pub flicker: Option<u32>,
+}
+
+/// Runs `igemu sweep`; returns the exit code.
+pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
+    use igemu::sweep::{self, grid, pareto};
+    // Everything is checked before the first render.
+    let shard = match &a.shard {
+        Some(s) => Some(grid::Shard::parse(s).map_err(|m| arg_error("--shard", m))?),
+        None => None,
+    };
+    if a.jobs == 0 || a.jobs > 1024 {
+        return Err(arg_error(
+            "--jobs",
+            format!("must be in 1..=1024, got {}", a.jobs),
+        ));
+    }
+    let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
+    if let Some(p) = &a.plot {
+        sweep::plot::PlotFormat::of(p).map_err(|m| arg_error("--plot", m))?;
+    }
+    if let Some(n) = a.flicker
+        && !(2..=64).contains(&n)
+    {
+        return Err(arg_error(
+            "--flicker",
+            format!("phases must be in 2..=64, got {n}"),
+        ));
+    }
+    if a.flicker.is_none() && axes.contains(&pareto::Axis::Flicker) {
+        return Err(arg_error(
+            "--axes",
+            "the flicker axis needs the flicker metrics: add --flicker PHASES".into(),
+        ));
+    }
+    let file = igemu::files::TomlFile::read(&a.grid)?;
+    let configs = grid::Grid::parse(&file)?.expand(&file)?;
+    let scenes: Vec<Scene> = if a.scenes.is_empty() {
+        vec![Scene::default_scene()]
+    } else {
+        a.scenes
+            .iter()
+            .map(|s| load_scene(Some(s)))
+            .collect::<Result<_, _>>()?
+    };
+    for c in &configs {
+        for s in &scenes {
+            pipeline::guard_band(s, &c.hw).map_err(|e| {
+                arg_error(
+                    &a.grid,
+                    format!(
+                        "configuration {} ({}) on scene `{}`: {e}",
+                        c.index, c.canonical, s.name
+                    ),
+                )
+            })?;
+        }
+    }
+    let cache = sweep::cache::PhaseCache::new();
+    let opts = sweep::SweepOptions {
+        out: &a.out,
+        resume: a.resume,
+        shard,
+        jobs: a.jobs,
+        cache: if a.no_reuse { None } else { Some(&cache) },
+        flicker: a.flicker,
+    };
+    // Progress bar with ETA on a terminal (indicatif hides it when stderr is not a terminal).
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} rows  {elapsed} elapsed, ETA {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let progress = |done: usize, total: usize| {
+        if bar.length() != Some(total as u64) {
+            // The first call: rows kept by --resume do not count towards the rate.
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+            bar.reset_eta();
+        } else {
+            bar.set_position(done as u64);
+        }
+    };
+    let summary = sweep::run(&configs, &scenes, &opts, &progress);
+    bar.finish_and_clear();
+    let summary = summary?;
+    eprintln!(
+        "igemu sweep: {} configurations x {} scenes; this run: {} rows ({} kept from {}, {} computed) -> {}",
+        configs.len(),
+        scenes.len(),
+        summary.planned,
+        summary.reused,
+        a.out,
+        summary.computed,
+        a.out
+    );
+    let rows = &summary.rows;
+    if let Some(p) = &a.plot {
+        sweep::plot::write(rows, axes[0], p)?;
+    }
+    let front = pareto::front(rows, &axes);
+    println!(
+        "Pareto front on {} ({} of {} rows):",
+        axes.iter()
+            .map(|x| x.name())
+            .collect::<Vec<_>>()
+            .join(" x "),
+        front.len(),
+        rows.len()
+    );
+    print!("  {:>5}  {:<16}", "index", "scene");
+    for x in &axes {
+        print!("  {:>18}", x.name());
+    }
+    println!("  configuration");
+    for &i in &front {
+        let r = &rows[i];
+        print!("  {:>5}  {:<16}", r.index, r.scene);
+        for x in &axes {
+            print!("  {:>18.4}", x.value(r));
+        }
+        let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        println!("  {}", cfg.join(" "));
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,75 @@
+//! The `igemu` command line. `main` only maps `try_main`'s result to an exit code:
+//! 0 ok, 1 a check failed, 2 bad input or error (clap's own argument errors exit 2 too).
+//!
+//! Files: `args.rs` (argument types shared by several commands), `print.rs` (the text
+//! reports), `cmd/` (one file per command: its arguments and its run).
+
+mod args;
+mod cmd;
+mod print;
+
+use clap::{Parser, Subcommand};
+use igemu::error::Error;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "igemu",
+    version,
+    about = "Emulator of fixed-point image-generator hardware, compared code by code with a float reference"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Render a scene through the fixed-point pipeline and the float reference; write the image and the report.
+    Render(cmd::render::RenderArgs),
+    /// Regression gate: render and exit 1 when a threshold fails.
+    Check(cmd::check::CheckArgs),
+    /// Word widths from contrast, Weber fraction and gamma (Kovalev & Tokarev eq. 9-11).
+    Widths(cmd::widths::WidthsArgs),
+    /// Depth of field of a thin lens: front and back depth, near and far limits.
+    Dof(cmd::dof::DofArgs),
+    /// Cycle-count a frame on the scene's real workload: bottleneck, frame rate, real-time check, cost.
+    Cycles(cmd::cycles::CyclesArgs),
+    /// Small-object flicker: a light point and a thin line swept over 32x32 sub-pixel phases.
+    Flicker(cmd::flicker::FlickerArgs),
+    /// HDL co-simulation of the Verilog models in hdl-models/ (see hdl-models/README.md).
+    #[command(subcommand)]
+    Hdl(cmd::hdl::HdlCmd),
+    /// Hardware cost per stage: the analytic model, and with --synth yosys cell counts of the HDL models.
+    Cost(cmd::cost::CostArgs),
+    /// Word-width sweep: render every configuration of a grid, one JSON line each, and print the Pareto front.
+    Sweep(cmd::sweep::SweepArgs),
+    /// Observed min/max per signal and the narrowest format holding it; export the formats as typedefs.
+    Ranges(cmd::ranges::RangesArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match try_main(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("igemu: error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn try_main(cli: Cli) -> Result<ExitCode, Error> {
+    match cli.cmd {
+        Cmd::Render(a) => cmd::render::run(a),
+        Cmd::Check(a) => cmd::check::run(a),
+        Cmd::Widths(a) => cmd::widths::run(a),
+        Cmd::Dof(a) => cmd::dof::run(a),
+        Cmd::Cycles(a) => cmd::cycles::run(a),
+        Cmd::Flicker(a) => cmd::flicker::run(a),
+        Cmd::Hdl(c) => cmd::hdl::run(c),
+        Cmd::Cost(a) => cmd::cost::run(a),
+        Cmd::Sweep(a) => cmd::sweep::run(a),
+        Cmd::Ranges(a) => cmd::ranges::run(a),
+    }
+}

@@ -1,0 +1,278 @@
+//! The text reports of the commands: the render report, the cycle report, the width
+//! validation table, and the work-count list they share.
+
+use igemu::cycles::CycleReport;
+use igemu::pipeline::Report;
+use igemu::stage::logdomain::RampCheck;
+use std::collections::BTreeMap;
+
+/// Prints the cycle report (plan, per-stage table, frame rate, cost, simulator speed).
+pub fn print_cycles(c: &CycleReport) {
+    let p = &c.plan;
+    println!(
+        "plan: {} | tiles {}x{} px: {} of {} touched | pixels simulated {} of {} ({:.1}%){}",
+        p.stages.join(" -> "),
+        p.tile,
+        p.tile,
+        p.tiles_touched,
+        p.tiles_total,
+        p.pixels_simulated,
+        p.pixels_total,
+        100.0 * p.pixels_simulated as f64 / p.pixels_total.max(1) as f64,
+        if p.unmodelled.is_empty() {
+            String::new()
+        } else {
+            format!(" | no cycle model: {}", p.unmodelled.join(", "))
+        }
+    );
+    println!(
+        "{:<11} {:>5} {:>4} {:>3} {:>5} {:>8} {:>12} {:>10} {:>10} {:>10} {:>9}  item",
+        "stage",
+        "lanes",
+        "lat",
+        "ii",
+        "fifo",
+        "tokens",
+        "items",
+        "busy",
+        "stalled",
+        "starved",
+        "fifo max"
+    );
+    for s in &c.stages {
+        println!(
+            "{:<11} {:>5} {:>4} {:>3} {:>5} {:>8} {:>12} {:>10} {:>10} {:>10} {:>9}  {}",
+            s.name,
+            s.lanes,
+            s.latency,
+            s.ii,
+            s.fifo,
+            s.tokens,
+            s.items,
+            s.busy,
+            s.stalled,
+            s.starved,
+            s.fifo_max,
+            s.item
+        );
+    }
+    let t = &c.throughput;
+    println!(
+        "frame: {} cycles | bottleneck {} | bounds {} <= {} <= {} {} | frame-port-bound cycles {}",
+        c.total_cycles,
+        c.bottleneck,
+        c.lower_bound,
+        c.total_cycles,
+        c.upper_bound,
+        if c.bounds_hold { "hold" } else { "VIOLATED" },
+        c.frame_port_bound_cycles
+    );
+    println!(
+        "at {} MHz: {:.3} ms/frame, {:.1} fps, {:.2} Mpixel/s | display needs {} Hz = {:.2} Mpixel/s: {}",
+        t.clock_mhz,
+        t.frame_ms,
+        t.fps,
+        t.pixel_rate / 1e6,
+        t.refresh_hz,
+        t.required_pixel_rate / 1e6,
+        if t.real_time {
+            "real time"
+        } else {
+            "NOT real time"
+        }
+    );
+    let k = &c.cost;
+    let list = |m: &BTreeMap<String, u64>| {
+        m.iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    println!(
+        "cost: RAM {} bits ({}) | ROM {} bits ({}) | {} adders ({} bits) | {} multipliers ({} bit-products)",
+        k.total_storage_bits,
+        list(&k.storage_bits),
+        k.total_rom_bits,
+        list(&k.rom_bits),
+        k.adders,
+        k.adder_bits,
+        k.multipliers,
+        k.multiplier_bit_products
+    );
+    let packed: Vec<String> = k
+        .packed
+        .iter()
+        .map(|p| {
+            format!(
+                "{} {} bits {}",
+                p.name,
+                p.bits,
+                if p.verified { "ok" } else { "MISMATCH" }
+            )
+        })
+        .collect();
+    println!("packed with bitvec and read back: {}", packed.join(", "));
+    println!(
+        "simulator: {} cycles in {:.2} ms = {:.1} M cycles/s",
+        c.total_cycles,
+        c.sim.wall_ms,
+        c.sim.cycles_per_s / 1e6
+    );
+}
+
+/// Prints the ramp validation of the recommended word widths.
+pub fn print_width_checks(checks: &[RampCheck], weber: f64) {
+    println!(
+        "validation by emulation: a {}-sample ramp over the full contrast, quantised and through the gamma LUT;",
+        igemu::stage::logdomain::RAMP_SAMPLES
+    );
+    println!("  contours = adjacent output steps with a luminance ratio above 1 + {weber}");
+    println!(
+        "  {:<7} {:>9} {:>8} {:>12} {:>8} {:>9}  verdict",
+        "coding", "code bits", "DAC bits", "widths", "levels", "contours"
+    );
+    for c in checks {
+        let verdict = match (c.recommended, c.disagrees) {
+            (true, false) => "0 as theory predicts",
+            (false, false) => "visible, as theory predicts",
+            (true, true) => "DISAGREES with theory: contours at the recommended widths",
+            (false, true) => "DISAGREES with theory: no visible contour one bit narrower",
+        };
+        println!(
+            "  {:<7} {:>9} {:>8} {:>12} {:>8} {:>9}  {verdict}",
+            c.coding,
+            c.code_bits,
+            c.dac_bits,
+            if c.recommended {
+                "recommended"
+            } else {
+                "1 bit less"
+            },
+            c.levels,
+            c.contours
+        );
+    }
+}
+
+/// The non-zero work counts, `name count` comma separated.
+fn fmt_work(w: &BTreeMap<String, u64>) -> String {
+    w.iter()
+        .filter(|(_, v)| **v > 0)
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Prints the render report; `out` is the image written.
+pub fn print_report(r: &Report, out: &str) {
+    let p = &r.plan;
+    println!(
+        "igemu {} | scene `{}` {}x{} | hardware `{}` | {} threads",
+        r.igemu_version,
+        r.scene.name,
+        r.scene.width,
+        r.scene.height,
+        r.hardware.name,
+        r.timing.threads
+    );
+    println!(
+        "plan: {} | region x {}..{} y {}..{} ({:.1}% of the screen) | {}x{} samples/pixel | gamma {}",
+        p.stages.join(" -> "),
+        p.region.x0,
+        p.region.x1,
+        p.region.y0,
+        p.region.y1,
+        100.0 * p.region_fraction,
+        p.samples,
+        p.samples,
+        p.gamma
+    );
+    println!();
+    println!(
+        "{:<11} {:>9} {:>9}  {:>10} {:>10} {:>9}  work",
+        "stage", "fixed ms", "float ms", "max|err|", "mean err", "overflow"
+    );
+    for s in &r.stages {
+        let (me, mean) = s.local.as_ref().map_or(("-".into(), "-".into()), |l| {
+            (
+                format!("{:.3}", l.max_abs_lsb),
+                format!("{:+.4}", l.mean_lsb),
+            )
+        });
+        let ov: u64 = s.signals.iter().map(|x| x.overflows).sum();
+        println!(
+            "{:<11} {:>9.2} {:>9.2}  {:>10} {:>10} {:>9}  {}",
+            s.name,
+            s.fixed_ms,
+            s.float_ms,
+            me,
+            mean,
+            ov,
+            fmt_work(&s.work)
+        );
+    }
+    println!(
+        "{:<11} {:>9.2} {:>9.2}  (host front end {:.2} ms, f64, shared)",
+        "total", r.timing.fixed_ms, r.timing.float_ms, r.timing.host_ms
+    );
+    let c = &r.end_to_end.codes;
+    let w = &r.end_to_end.weber;
+    println!();
+    println!(
+        "end to end, DAC codes ({} bits), fixed vs float reference:",
+        r.hardware.gamma.dac_bits
+    );
+    println!(
+        "  identical {:.4}% | max |diff| {} | mean diff {:+.5} | PSNR {}",
+        100.0 * c.identical_fraction,
+        c.max_abs_diff,
+        c.mean_diff,
+        c.psnr_db
+            .map_or("inf (identical)".into(), |p| format!("{p:.2} dB"))
+    );
+    let hist: Vec<String> = c
+        .histogram
+        .iter()
+        .map(|(d, n)| format!("{d:+}: {n}"))
+        .collect();
+    println!("  histogram of differences: {}", hist.join(", "));
+    println!(
+        "  luminance (display model): max Weber {:.4} | mean {:.6} | visible (> {}) {} px ({:.4}%)",
+        w.max,
+        w.mean,
+        w.delta,
+        w.over_delta,
+        100.0 * w.over_delta_fraction
+    );
+    let k = &r.contours;
+    println!(
+        "  visible contours (smooth regions, window {}x{} px per side, delta {}): {} steps ({} px) | float reference: {} steps | smooth steps {}",
+        k.window[0],
+        k.window[1],
+        k.delta,
+        k.contour_steps,
+        k.contour_pixels,
+        k.contour_steps_reference,
+        k.smooth_steps
+    );
+    if let Some(pm) = r
+        .stages
+        .iter()
+        .find_map(|s| s.notes.get("temporal_period_mean"))
+    {
+        println!(
+            "  temporal dither: static frame over a period of {} frames: {} of {} pixels average exactly to their input (max |error| {} LSB)",
+            pm["period"], pm["exact_pixels"], pm["pixels"], pm["max_abs_error"]
+        );
+    }
+    println!(
+        "cost: storage {} bits ({:.1} KiB), LUT/ROM {} bits | overflows {}",
+        r.storage_bits,
+        r.storage_bits as f64 / 8192.0,
+        r.lut_bits,
+        r.overflows
+    );
+    println!();
+    print_cycles(&r.cycles);
+    println!("wrote {out}");
+}
