@@ -64,9 +64,14 @@ pub fn cost(
     }
 }
 
-/// Stats record for an overflow count.
+/// Stats record for an overflow count of an integer word of `bits` bits (`UQ<bits>.0`).
 pub fn overflow_signal(name: &str, bits: u32, n: u64) -> SignalStats {
-    let mut s = SignalStats::new(name, QFormat::new(false, bits.min(32), 0));
+    overflow_signal_in(name, QFormat::new(false, bits.min(32), 0), n)
+}
+
+/// Stats record for an overflow count of a signal in `format`.
+pub fn overflow_signal_in(name: &str, format: QFormat, n: u64) -> SignalStats {
+    let mut s = SignalStats::new(name, format);
     s.add_overflows(n);
     s
 }

@@ -4,7 +4,7 @@
 
 use super::layers::{DepthImage, LayerPlan, layer_box};
 use crate::config::DofCfg;
-use crate::fixed::{Overflow, QFormat, Quant, round_shift};
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
 use serde::Serialize;
 
 /// Work and overflow counts of the fixed model.
@@ -22,6 +22,8 @@ pub struct DofWork {
     pub line_overflows: u64,
     /// Accumulator overflows.
     pub acc_overflows: u64,
+    /// Output pixels saturated to the frame format (signal `dof.out`).
+    pub out_overflows: u64,
 }
 
 /// In-image tap sums along one axis of length `n` for taps `c`.
@@ -122,8 +124,9 @@ pub(super) fn share(plan: &LayerPlan, img_key: u32, cov: u16, idx: u16, l: usize
     m
 }
 
-/// The fixed-point layered DoF. Returns the output codes and the work counts; `Err` names
-/// the overflowing signal when the overflow mode is ERROR.
+/// The fixed-point layered DoF. Returns the output codes in `frame_fmt` (rounded with
+/// `p.quant`, saturated and counted in [`DofWork::out_overflows`]) and the work counts; `Err`
+/// names the overflowing line-buffer or accumulator signal when the overflow mode is ERROR.
 pub fn layered_fixed(
     img: &DepthImage<u32>,
     plan: &LayerPlan,
@@ -245,10 +248,16 @@ pub fn layered_fixed_observed(
             }
         }
     }
-    let max = frame_fmt.max_code() as u128;
+    // The composite carries `g` guard bits below the frame LSB.
+    let frame_q = Quantizer::new(frame_fmt, p.quant, Overflow::Sat);
+    let raw_frac = (g + frame_fmt.frac_bits) as i32;
     let res = out
         .iter()
-        .map(|&v| (round_shift(v as i128, g, p.quant) as u128).min(max) as u32)
+        .map(|&v| {
+            let r = frame_q.quantize_raw(v as i128, raw_frac);
+            work.out_overflows += u64::from(r.overflow);
+            r.code as u32
+        })
         .collect();
     Ok((res, work))
 }

@@ -92,11 +92,11 @@ pub fn plan_layers(
     let mid_sigma = |far: u32, near: u32| {
         let zm = (lens.z_of(far) + lens.z_of(near)) / 2.0;
         // The middle depth as a code (the background's z_inf is exact): sigma from its code.
-        let code = (zm * (1u64 << lens.z_frac) as f64).round();
-        let c = if code >= u32::MAX as f64 {
+        let code = lens.z_code(zm);
+        let c = if code >= i64::from(u32::MAX) {
             u32::MAX
         } else {
-            code as u32
+            code.max(0) as u32
         };
         (zm, sig(c))
     };

@@ -1,7 +1,7 @@
 //! The thin-lens blur as a function of the depth code (docs/reference.md §2a, §2b): the
 //! [`LensMap`] constants and the per-pixel sigma code `sigma = G (z - z_e)`.
 
-use crate::fixed::{Quant, round_shift};
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
 use crate::scene::{Camera, Lens, screen_z};
 use serde::Serialize;
 
@@ -84,19 +84,49 @@ impl LensMap {
         2.0 * self.g * (self.z_of(key) - (self.z_far_edge + self.z_near_edge) / 2.0).abs()
     }
 
-    fn code(&self, z: f64) -> i64 {
-        (z * (1u64 << self.z_frac) as f64).round() as i64
+    /// The quantiser of the slope constant G: `UQ<i>.16` (`G_FRAC` fraction bits, `i` the
+    /// integer bits of G after rounding, at least 1), RND_INF, SAT (the format holds G, so SAT
+    /// does not act below 62 bits).
+    pub fn g_quantizer(&self) -> Quantizer {
+        fitted(G_FRAC, &[self.g])
     }
 
-    /// Fixed-point sigma code (`SIGMA_FRAC` fraction bits): one `z x G` multiply and a
-    /// round-to-nearest shift, with the constants quantised once.
+    /// G as the hardware holds it: a code with `G_FRAC` fraction bits.
+    pub fn g_code(&self) -> i64 {
+        self.g_quantizer().quantize_f64(self.g).code
+    }
+
+    /// The quantiser of the screen-z constants (the in-focus band edges, infinity and the
+    /// layers' middle depths) as depth codes: `UQ<i>.<z_frac>` with `i` the integer bits of
+    /// `z_inf > 1` rounded (`UQ1.24` with the default z buffer), signed `Q<i+1>.<z_frac>` when
+    /// the band's far edge lies before the near plane (negative z); RND_INF, SAT (the format
+    /// holds every constant, so SAT does not act below 62 bits).
+    pub fn z_quantizer(&self) -> Quantizer {
+        fitted(
+            self.z_frac,
+            &[self.z_inf, self.z_far_edge, self.z_near_edge],
+        )
+    }
+
+    /// The depth code of a screen z in `[min(z_far_edge, 0), z_inf]`, quantised with
+    /// [`LensMap::z_quantizer`].
+    pub fn z_code(&self, z: f64) -> i64 {
+        self.z_quantizer().quantize_f64(z).code
+    }
+
+    /// Fixed-point sigma code (`SIGMA_FRAC` fraction bits, signed): one `z x G` multiply and
+    /// a round-to-nearest shift (RND, the shared `round_shift`) of the exact product, with the
+    /// constants as the hardware holds them ([`LensMap::z_quantizer`],
+    /// [`LensMap::g_quantizer`]; the model quantises them on every call).
     pub fn sigma_code(&self, key: u32) -> i64 {
+        let zq = self.z_quantizer();
+        let code = |z: f64| zq.quantize_f64(z).code;
         let z = if key == u32::MAX {
-            self.code(self.z_inf)
+            code(self.z_inf)
         } else {
             key as i64
         };
-        let (zf, zn) = (self.code(self.z_far_edge), self.code(self.z_near_edge));
+        let (zf, zn) = (code(self.z_far_edge), code(self.z_near_edge));
         let d = if z > zf {
             z - zf
         } else if z < zn {
@@ -104,12 +134,42 @@ impl LensMap {
         } else {
             return 0;
         };
-        let g = (self.g * (1u64 << G_FRAC) as f64).round() as i128;
+        let g = self.g_code() as i128;
         round_shift(d as i128 * g, self.z_frac + G_FRAC - SIGMA_FRAC, Quant::Rnd) as i64
     }
 
-    /// Width of the G constant in bits (integer + `G_FRAC`).
+    /// Width of the G constant in bits (integer + `G_FRAC`): its quantiser's format.
     pub fn g_bits(&self) -> u32 {
-        (self.g.max(1.0).log2().floor() as u32 + 1) + G_FRAC
+        self.g_quantizer().format.total_bits()
+    }
+}
+
+/// Rounding of the lens constants: RND_INF, to nearest with ties away from zero, which is
+/// `f64::round` for every sign.
+const CONST_QUANT: Quant = Quant::RndInf;
+
+/// Widest word of a lens constant (the quantiser is exact up to 62 bits; the 32-bit limit of
+/// the configurable formats does not bind these internal words).
+const CONST_MAX_BITS: u32 = 62;
+
+/// The quantiser of the constants `xs`: `frac` fraction bits, [`CONST_QUANT`], SAT and the
+/// fewest integer bits (at least 1, plus a sign bit when one of `xs` is negative) that hold
+/// every `xs` after rounding, so SAT acts only beyond [`CONST_MAX_BITS`] (no overflow to
+/// count). The estimate from the largest magnitude is short by one bit at most, when
+/// rounding carries into the next power of two.
+fn fitted(frac: u32, xs: &[f64]) -> Quantizer {
+    let signed = xs.iter().any(|&x| x < 0.0);
+    let m = xs.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
+    let int_max = CONST_MAX_BITS.saturating_sub(frac).max(1);
+    let q = |int: u32| {
+        let f = QFormat::new(signed, int.min(int_max), frac);
+        Quantizer::new(f, CONST_QUANT, Overflow::Sat)
+    };
+    let int = (m.log2().floor() as u32).min(CONST_MAX_BITS) + 1 + u32::from(signed);
+    let first = q(int);
+    if xs.iter().any(|&x| first.quantize_f64(x).overflow) {
+        q(int + 1)
+    } else {
+        first
     }
 }

@@ -3,7 +3,8 @@
 use super::{
     DepthImage, LayerWork, LensMap, RegionError, SIGMA_FRAC, additive_layered, cost,
     difference_degree, edge_band, layer_work, layered_f64, layered_fixed, local_error,
-    overflow_signal, per_pixel_scatter, plan_layers, region_error, weber_linear,
+    overflow_signal, overflow_signal_in, per_pixel_scatter, plan_layers, region_error,
+    weber_linear,
 };
 
 /// Runs the dof stage inside the pipeline: replaces the frame codes and the float frame with
@@ -152,6 +153,8 @@ pub fn run_stage(
     ));
     r.signals
         .push(overflow_signal("dof.acc", p.acc_bits, work.acc_overflows));
+    r.signals
+        .push(overflow_signal_in("dof.out", frame_fmt, work.out_overflows));
     frame.acc = out;
     *frame_ref = new_ref;
     let layers = layer_work(&plan, w, h);
