@@ -6,12 +6,13 @@ mod common;
 use common::Rng;
 use igemu::config::DofCfg;
 use igemu::config::HwConfig;
-use igemu::fixed::{Overflow, QFormat};
+use igemu::fixed::{Overflow, QFormat, Quant, round_shift};
 use igemu::pipeline::{self, RenderOptions};
 use igemu::scene::Scene;
 use igemu::stage::dof::{
-    DepthImage, LayerPlan, LensMap, additive_layered, difference_degree, edge_band, layered_f64,
-    layered_fixed, per_pixel_scatter, plan_layers, region_error, taps_f64, taps_fixed,
+    DepthImage, G_FRAC, LayerPlan, LensMap, SIGMA_FRAC, additive_layered, difference_degree,
+    edge_band, layered_f64, layered_fixed, per_pixel_scatter, plan_layers, region_error, taps_f64,
+    taps_fixed,
 };
 
 const ZF: u32 = 16;
@@ -494,6 +495,205 @@ fn hard_case_accumulator_overflow_at_full_white() {
         narrow.acc_bits,
         work_n.acc_overflows,
         out_n.iter().min().unwrap()
+    );
+}
+
+/// The dof output is rounded and saturated to the frame format by a quantiser, and the
+/// saturated pixels are counted (`DofWork::out_overflows`, signal `dof.out`).
+#[test]
+fn out_saturations_to_a_narrow_frame_format_are_counted() {
+    const NARROW: QFormat = QFormat::new(false, 8, 0);
+    // In focus (sigma = 0, passed through): the output is the input saturated to 255.
+    let mut img = Img::new(12, 10, 0, 0.45);
+    let vals = [0, 1, 100, 254, 255, 256, 1000, 4094, WHITE];
+    for (i, v) in img.v.iter_mut().enumerate() {
+        *v = vals[i % vals.len()];
+    }
+    let p = params();
+    let plan = img.plan(&p);
+    assert!(plan.layers.iter().all(|l| l.m == 0));
+    let (out, work) = layered_fixed(&img.fixed(), &plan, &p, NARROW).unwrap();
+    let want: Vec<u32> = img.v.iter().map(|&v| v.min(255)).collect();
+    assert_eq!(out, want);
+    let saturated = img.v.iter().filter(|&&v| v > 255).count() as u64;
+    assert_eq!(work.out_overflows, saturated);
+    assert!(saturated > 0);
+    let (out12, work12) = layered_fixed(&img.fixed(), &plan, &p, FRAME).unwrap();
+    assert_eq!((out12, work12.out_overflows), (img.v.clone(), 0));
+    // Blurred full white: every pixel saturates.
+    let img = Img::new(20, 16, WHITE, 0.95);
+    let plan = img.plan(&p);
+    assert!(plan.layers.iter().all(|l| l.m > 0));
+    let (out, work) = layered_fixed(&img.fixed(), &plan, &p, NARROW).unwrap();
+    assert!(out.iter().all(|&v| v == 255));
+    assert_eq!(work.out_overflows, (img.w * img.h) as u64);
+    assert_eq!(work.acc_overflows + work.line_overflows, 0);
+}
+
+#[test]
+fn dof_stage_reports_the_out_signal_in_the_frame_format() {
+    let hw = HwConfig::default_config();
+    let r = pipeline::render(
+        &Scene::default_scene(),
+        &hw,
+        RenderOptions { stage_local: false },
+    )
+    .unwrap();
+    let d = r.report.stages.iter().find(|s| s.name == "dof").unwrap();
+    let names: Vec<&str> = d.signals.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["dof.line", "dof.acc", "dof.out"]);
+    let out = &d.signals[2];
+    assert_eq!(out.format, hw.accumulate.frame.format);
+    assert_eq!(out.overflows, 0);
+}
+
+/// The depth code of screen z as before the quantiser: `f64::round`.
+fn old_z_code(l: &LensMap, z: f64) -> i64 {
+    (z * (1u64 << l.z_frac) as f64).round() as i64
+}
+
+/// The sigma code as computed before the quantiser (`f64::round` of the constants).
+fn old_sigma_code(l: &LensMap, key: u32) -> i64 {
+    let z = if key == u32::MAX {
+        old_z_code(l, l.z_inf)
+    } else {
+        key as i64
+    };
+    let (zf, zn) = (old_z_code(l, l.z_far_edge), old_z_code(l, l.z_near_edge));
+    let d = if z > zf {
+        z - zf
+    } else if z < zn {
+        z - zn
+    } else {
+        return 0;
+    };
+    let g = (l.g * (1u64 << G_FRAC) as f64).round() as i128;
+    round_shift(d as i128 * g, l.z_frac + G_FRAC - SIGMA_FRAC, Quant::Rnd) as i64
+}
+
+/// The sigma of a layer's middle depth as computed before the quantiser.
+fn old_mid_sigma(l: &LensMap, far: u32, near: u32) -> f64 {
+    let zm = (l.z_of(far) + l.z_of(near)) / 2.0;
+    let code = (zm * (1u64 << l.z_frac) as f64).round();
+    let c = if code >= u32::MAX as f64 {
+        u32::MAX
+    } else {
+        code as u32
+    };
+    old_sigma_code(l, c) as f64 / (1u64 << SIGMA_FRAC) as f64
+}
+
+#[test]
+fn quantised_lens_constants_agree_with_f64_round_on_the_embedded_scenes() {
+    let hw = HwConfig::default_config();
+    let zf = hw.visibility.z.format.frac_bits;
+    let mut lenses = 0;
+    for name in ["default", "default-pinhole", "cone-focus"] {
+        let scene = Scene::embedded(name).unwrap();
+        let Some(lm) = LensMap::from_camera(&scene.camera, scene.image.height, zf) else {
+            assert_eq!(name, "default-pinhole");
+            continue;
+        };
+        lenses += 1;
+        // Named formats: G in UQ5.16 (G = 18.99, 25.32 px per unit z), z codes in UQ1.24
+        // (z_inf = 1/(1 - 2/50) = 1.0417).
+        assert_eq!(lm.g_quantizer().format.to_string(), "UQ5.16", "{name}");
+        assert_eq!(lm.z_quantizer().format.to_string(), "UQ1.24", "{name}");
+        assert_eq!(lm.g_bits(), 21);
+        assert_eq!(
+            lm.g_code(),
+            (lm.g * 65536.0).round() as i64,
+            "{name}: G code"
+        );
+        for z in [lm.z_inf, lm.z_far_edge, lm.z_near_edge] {
+            assert_eq!(lm.z_code(z), old_z_code(&lm, z), "{name}: z {z}");
+        }
+        let a = default_frame(&scene, &hw);
+        let mut keys = a.frame.depth.clone();
+        keys.push(u32::MAX);
+        keys.sort_unstable();
+        keys.dedup();
+        assert!(keys.len() > 100, "{name}: {} depth codes", keys.len());
+        let mut blurred = 0;
+        for &k in &keys {
+            let c = lm.sigma_code(k);
+            assert_eq!(c, old_sigma_code(&lm, k), "{name}: depth code {k}");
+            blurred += usize::from(c != 0);
+        }
+        assert!(blurred > 0 && blurred < keys.len(), "{name}: {blurred}");
+        let plan = plan_layers(&a.frame.depth, &a.frame.coverage, 16, &lm, &hw.dof).unwrap();
+        for l in &plan.layers {
+            assert_eq!(
+                l.sigma,
+                old_mid_sigma(&lm, l.key_far, l.key_near),
+                "{name}: layer {l:?}"
+            );
+        }
+    }
+    assert_eq!(lenses, 2);
+}
+
+#[test]
+fn quantised_lens_constants_agree_with_f64_round_at_the_format_edges() {
+    let z24 = |z: f64| LensMap {
+        g: 12.0,
+        z_far_edge: z,
+        z_near_edge: 0.0,
+        z_inf: 1.0 / (1.0 - 2.0 / 50.0),
+        z_frac: 24,
+        coc_px: 1.0,
+    };
+    let cases = [
+        // G = 2 - 2^-20 rounds up to 2.0 (code 131072): one integer bit more than G's floor.
+        (
+            LensMap {
+                g: 2.0 - 2f64.powi(-20),
+                ..lens()
+            },
+            "UQ2.16",
+            "UQ1.16",
+        ),
+        // G = 100000.3 px per unit z: wider than the 32-bit configurable formats.
+        (
+            LensMap {
+                g: 100_000.3,
+                ..lens()
+            },
+            "UQ17.16",
+            "UQ1.16",
+        ),
+        // The band's far edge before the near plane (z = -0.75): signed z codes.
+        (z24(-0.75), "UQ4.16", "Q2.24"),
+        // Ties: -1.5 z LSBs rounds away from zero to -2 LSBs, as f64::round.
+        (z24(-1.5 * 2f64.powi(-24)), "UQ4.16", "Q2.24"),
+        // 2.5 LSBs rounds to 3.
+        (z24(2.5 * 2f64.powi(-24)), "UQ4.16", "UQ1.24"),
+    ];
+    for (lm, g_fmt, z_fmt) in cases {
+        assert_eq!(lm.g_quantizer().format.to_string(), g_fmt, "{lm:?}");
+        assert_eq!(lm.z_quantizer().format.to_string(), z_fmt, "{lm:?}");
+        assert_eq!(lm.g_code(), (lm.g * 65536.0).round() as i64, "{lm:?}");
+        for z in [lm.z_inf, lm.z_far_edge, lm.z_near_edge] {
+            assert_eq!(lm.z_code(z), old_z_code(&lm, z), "{lm:?}: z {z}");
+        }
+        let one = 1u32 << lm.z_frac;
+        let zf = old_z_code(&lm, lm.z_far_edge).max(0) as u32;
+        let keys = (0..=one)
+            .step_by(one as usize / 997)
+            .chain(zf.saturating_sub(3)..zf + 4)
+            .chain([one, u32::MAX]);
+        for k in keys {
+            assert_eq!(lm.sigma_code(k), old_sigma_code(&lm, k), "{lm:?}: key {k}");
+        }
+    }
+    // The tie cases really are ties of the old rounding.
+    assert_eq!(
+        old_z_code(&z24(-1.5 * 2f64.powi(-24)), -1.5 * 2f64.powi(-24)),
+        -2
+    );
+    assert_eq!(
+        old_z_code(&z24(2.5 * 2f64.powi(-24)), 2.5 * 2f64.powi(-24)),
+        3
     );
 }
 

@@ -1,5 +1,5 @@
 // Depth of field: the 1-D multiply-accumulate of the separable layered convolution, one
-// output sample of a pass per clock (src/stage/dof.rs `row_mac`, `border_sum`).
+// output sample of a pass per clock (src/stage/dof/fixed.rs `row_mac`, `border_sum`).
 //
 // dof_row_mac holds the coefficient ROM (one centred TAPS-entry set per layer, loaded with
 // $readmemh from the Rust model's dof_rom.hex) and the two passes:

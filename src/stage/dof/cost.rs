@@ -1,0 +1,77 @@
+//! Cost of the dof datapath (docs/reference.md §7b) and its overflow-count signals.
+
+use super::layers::LayerPlan;
+use super::lens::LensMap;
+use crate::config::DofCfg;
+use crate::fixed::{QFormat, SignalStats};
+use crate::stage::{Cost, Unit};
+
+/// Cost of the datapath: line buffers for the largest mask, the composite buffer, the
+/// coefficient ROM and the arithmetic units by width.
+pub fn cost(
+    plan: &LayerPlan,
+    p: &DofCfg,
+    width: u64,
+    height: u64,
+    code_bits: u32,
+    n2: u32,
+    lens: &LensMap,
+) -> Cost {
+    let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0) as u64;
+    let a_bits = n2.next_power_of_two().trailing_zeros() + 1;
+    let alpha_line = a_bits + p.coef_bits + 1;
+    let line = (2 * m_max + 1) * width * (p.line_bits + alpha_line) as u64;
+    let composite = width * height * (code_bits + p.guard_bits) as u64;
+    let rom: u64 = plan
+        .layers
+        .iter()
+        .map(|l| (l.m as u64 + 1) * (p.coef_bits + 1) as u64)
+        .sum();
+    let taps = (2 * m_max + 1) as u32;
+    let xm_bits = code_bits + a_bits;
+    Cost {
+        storage_bits: line + composite,
+        lut_bits: rom,
+        adders: vec![
+            Unit::adder("horizontal tap sum (intensity)", taps, p.line_bits),
+            Unit::adder("vertical tap sum (intensity)", taps, p.acc_bits),
+            Unit::adder("alpha tap sums", 2 * taps, 2 * p.coef_bits + a_bits + 1),
+            Unit::adder(
+                "composite (over)",
+                1,
+                code_bits + p.guard_bits + p.alpha_bits,
+            ),
+        ],
+        multipliers: vec![
+            Unit::mul("sigma = G (z - z_e)", 1, lens.z_frac + 1, lens.g_bits()),
+            Unit::mul("premultiply x * coverage", 1, code_bits, a_bits),
+            Unit::mul("horizontal taps", taps, xm_bits, p.coef_bits + 1),
+            Unit::mul("vertical taps", taps, p.line_bits, p.coef_bits + 1),
+            Unit::mul("alpha taps", 2 * taps, alpha_line, p.coef_bits + 1),
+            Unit::mul(
+                "layer colour (divide acc / alpha)",
+                1,
+                p.acc_bits + p.guard_bits,
+                2 * p.coef_bits + a_bits + 1,
+            ),
+            Unit::mul(
+                "composite (colour x alpha, back x (1-alpha))",
+                2,
+                code_bits + p.guard_bits,
+                p.alpha_bits + 1,
+            ),
+        ],
+    }
+}
+
+/// Stats record for an overflow count of an integer word of `bits` bits (`UQ<bits>.0`).
+pub fn overflow_signal(name: &str, bits: u32, n: u64) -> SignalStats {
+    overflow_signal_in(name, QFormat::new(false, bits.min(32), 0), n)
+}
+
+/// Stats record for an overflow count of a signal in `format`.
+pub fn overflow_signal_in(name: &str, format: QFormat, n: u64) -> SignalStats {
+    let mut s = SignalStats::new(name, format);
+    s.add_overflows(n);
+    s
+}

@@ -1,0 +1,274 @@
+//! The fixed-point layered datapath: per layer the input planes, the horizontal and vertical
+//! tap passes ([`row_mac`], the HDL model's reference), the layer colour and alpha, and the
+//! back-to-front composite; work and overflow counts in [`DofWork`].
+
+use super::layers::{DepthImage, LayerPlan, layer_box};
+use crate::config::DofCfg;
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
+use serde::Serialize;
+
+/// Work and overflow counts of the fixed model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct DofWork {
+    /// Multiply-accumulates (both passes, intensity and alpha planes).
+    pub macs: u64,
+    /// Layer colour divides.
+    pub divides: u64,
+    /// Composite (over) operations.
+    pub composites: u64,
+    /// Pixel-layer pairs passed through (sigma = 0 layers).
+    pub passthrough: u64,
+    /// Line-buffer overflows.
+    pub line_overflows: u64,
+    /// Accumulator overflows.
+    pub acc_overflows: u64,
+    /// Output pixels saturated to the frame format (signal `dof.out`).
+    pub out_overflows: u64,
+}
+
+/// In-image tap sums along one axis of length `n` for taps `c`.
+pub(super) fn border_sums<T: Copy + Default + std::ops::AddAssign>(c: &[T], n: usize) -> Vec<T> {
+    (0..n).map(|x| border_sum(c, x, n)).collect()
+}
+
+/// The in-line tap sum at position `x` of a line of length `n` (the border renormalisation
+/// weight `Wx` or `Wy`): the sum of the taps `c[t]` whose sample `x + t - M` lies in
+/// `[0, n)`, `M = c.len() / 2`.
+pub fn border_sum<T: Copy + Default + std::ops::AddAssign>(c: &[T], x: usize, n: usize) -> T {
+    let m = c.len() / 2;
+    let mut s = T::default();
+    for (t, &v) in c.iter().enumerate() {
+        let xi = x as i64 + t as i64 - m as i64;
+        if xi >= 0 && (xi as usize) < n {
+            s += v;
+        }
+    }
+    s
+}
+
+/// One output sample of a 1-D pass (see [`row_mac`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MacOut {
+    /// Colour sum `sum c_t x_t`, saturated to the word's maximum.
+    pub x: u128,
+    /// Alpha sum `sum c_t a_t` (exact).
+    pub a: u128,
+    /// The colour sum did not fit the word (counted; stops the run with overflow ERROR).
+    pub overflow: bool,
+}
+
+/// One output sample of the horizontal or vertical pass: over the taps `t` whose sample
+/// `pos + t - M` lies on the line `[0, len)` (`M = coef.len() / 2`; samples off the line are
+/// zero), the colour sum saturated to `max` (the line-buffer or accumulator word) and the
+/// exact alpha sum. `sample(i)` gives the (colour, alpha) samples at line position `i`.
+/// The HDL model `hdl-models/rtl/dof_row_mac.v` is this function.
+#[inline(always)]
+pub fn row_mac(
+    coef: &[u64],
+    pos: usize,
+    len: usize,
+    max: u128,
+    sample: impl Fn(usize) -> (u128, u128),
+) -> MacOut {
+    let m = coef.len() / 2;
+    let t0 = m.saturating_sub(pos);
+    let t1 = coef.len().min((len + m).saturating_sub(pos));
+    let (mut sx, mut sa) = (0u128, 0u128);
+    for (t, &cv) in coef.iter().enumerate().take(t1).skip(t0) {
+        let (x, a) = sample(pos + t - m);
+        sx += cv as u128 * x;
+        sa += cv as u128 * a;
+    }
+    MacOut {
+        x: sx.min(max),
+        a: sa,
+        overflow: sx > max,
+    }
+}
+
+/// One layer's planes after the horizontal pass, over the layer's box (for the HDL vectors).
+#[derive(Clone, Copy, Debug)]
+pub struct LayerPlanes<'a> {
+    /// Layer index.
+    pub layer: usize,
+    /// Box origin in the image.
+    pub x0: usize,
+    /// Box origin in the image.
+    pub y0: usize,
+    /// Box width.
+    pub bw: usize,
+    /// Box height.
+    pub bh: usize,
+    /// Input colour plane `x * m` (row-major over the box).
+    pub xi: &'a [u128],
+    /// Input alpha plane `m`.
+    pub ai: &'a [u128],
+    /// Line buffer: horizontal colour sums (saturated).
+    pub hx: &'a [u128],
+    /// Line buffer: horizontal alpha sums.
+    pub ha: &'a [u128],
+}
+
+/// The pixel's share in a layer (in `1/n2` units).
+#[inline]
+pub(super) fn share(plan: &LayerPlan, img_key: u32, cov: u16, idx: u16, l: usize, n2: u32) -> u32 {
+    let own = if img_key == u32::MAX { 0 } else { cov as u32 };
+    let mut m = if idx as usize == l && img_key != u32::MAX {
+        own
+    } else {
+        0
+    };
+    if plan.background == Some(l) {
+        m += n2 - own.min(n2);
+    }
+    m
+}
+
+/// The fixed-point layered DoF. Returns the output codes in `frame_fmt` (rounded with
+/// `p.quant`, saturated and counted in [`DofWork::out_overflows`]) and the work counts; `Err`
+/// names the overflowing line-buffer or accumulator signal when the overflow mode is ERROR.
+pub fn layered_fixed(
+    img: &DepthImage<u32>,
+    plan: &LayerPlan,
+    p: &DofCfg,
+    frame_fmt: QFormat,
+) -> Result<(Vec<u32>, DofWork), (String, u32)> {
+    layered_fixed_observed(img, plan, p, frame_fmt, |_| {})
+}
+
+/// [`layered_fixed`], showing `observe` each blurred layer's planes after its horizontal
+/// pass (the HDL bench's scene taps).
+pub fn layered_fixed_observed(
+    img: &DepthImage<u32>,
+    plan: &LayerPlan,
+    p: &DofCfg,
+    frame_fmt: QFormat,
+    mut observe: impl FnMut(&LayerPlanes),
+) -> Result<(Vec<u32>, DofWork), (String, u32)> {
+    let (w, h) = (img.width, img.height);
+    let f = p.coef_bits;
+    let (q, g) = (p.alpha_bits, p.guard_bits);
+    let line_max: u128 = (1u128 << p.line_bits) - 1;
+    let acc_max: u128 = (1u128 << p.acc_bits) - 1;
+    let mut work = DofWork::default();
+    let mut out = vec![0u128; w * h];
+    let mut def = vec![false; w * h];
+    let one_q = 1u128 << q;
+    for (l, layer) in plan.layers.iter().enumerate() {
+        let all = plan.background == Some(l);
+        let Some((x0, y0, x1, y1)) = layer_box(w, h, &plan.index, l, layer.m, all) else {
+            continue;
+        };
+        let (bw, bh) = (x1 - x0, y1 - y0);
+        let c = &layer.coef;
+        let wx = border_sums(c, w);
+        let wy = border_sums(c, h);
+        // Input planes over the box.
+        let mut xi = vec![0u128; bw * bh];
+        let mut ai = vec![0u128; bw * bh];
+        for y in 0..bh {
+            for x in 0..bw {
+                let pi = (y + y0) * w + x + x0;
+                let s = share(plan, img.key[pi], img.cov[pi], plan.index[pi], l, img.n2);
+                xi[y * bw + x] = img.value[pi] as u128 * s as u128;
+                ai[y * bw + x] = s as u128;
+            }
+        }
+        if layer.m == 0 {
+            // sigma = 0: the mask is the identity; pass through.
+            for y in 0..bh {
+                for x in 0..bw {
+                    let (a, v) = (ai[y * bw + x], xi[y * bw + x]);
+                    if a == 0 {
+                        continue;
+                    }
+                    let pi = (y + y0) * w + x + x0;
+                    work.passthrough += 1;
+                    let col = round_shift(((v << g) / a) as i128, 0, p.quant) as u128;
+                    let aq = (a << q) / img.n2 as u128;
+                    composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
+                    work.composites += 1;
+                }
+            }
+            continue;
+        }
+        // Horizontal pass into the line buffer.
+        let mut hx = vec![0u128; bw * bh];
+        let mut ha = vec![0u128; bw * bh];
+        for y in 0..bh {
+            let (rx, ra) = (&xi[y * bw..(y + 1) * bw], &ai[y * bw..(y + 1) * bw]);
+            for x in 0..bw {
+                let r = row_mac(c, x, bw, line_max, |i| (rx[i], ra[i]));
+                work.macs += 2 * c.len() as u64;
+                if r.overflow {
+                    work.line_overflows += 1;
+                    if p.overflow == Overflow::Error {
+                        return Err(("dof.line".into(), p.line_bits));
+                    }
+                }
+                hx[y * bw + x] = r.x;
+                ha[y * bw + x] = r.a;
+            }
+        }
+        observe(&LayerPlanes {
+            layer: l,
+            x0,
+            y0,
+            bw,
+            bh,
+            xi: &xi,
+            ai: &ai,
+            hx: &hx,
+            ha: &ha,
+        });
+        // Vertical pass, colour, alpha, composite.
+        for y in 0..bh {
+            for x in 0..bw {
+                let r = row_mac(c, y, bh, acc_max, |i| (hx[i * bw + x], ha[i * bw + x]));
+                work.macs += 2 * c.len() as u64;
+                if r.overflow {
+                    work.acc_overflows += 1;
+                    if p.overflow == Overflow::Error {
+                        return Err(("dof.acc".into(), p.acc_bits));
+                    }
+                }
+                let (sx, sa) = (r.x, r.a);
+                if sa == 0 {
+                    continue;
+                }
+                let pi = (y + y0) * w + x + x0;
+                work.divides += 1;
+                // colour = round(F 2^g / A): half-up integer divide
+                let col = ((sx << (g + 1)) / sa).div_ceil(2);
+                let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
+                let aq = (((sa << (q + 1)) / ws).div_ceil(2)).min(one_q);
+                let _ = f;
+                composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
+                work.composites += 1;
+            }
+        }
+    }
+    // The composite carries `g` guard bits below the frame LSB.
+    let frame_q = Quantizer::new(frame_fmt, p.quant, Overflow::Sat);
+    let raw_frac = (g + frame_fmt.frac_bits) as i32;
+    let res = out
+        .iter()
+        .map(|&v| {
+            let r = frame_q.quantize_raw(v as i128, raw_frac);
+            work.out_overflows += u64::from(r.overflow);
+            r.code as u32
+        })
+        .collect();
+    Ok((res, work))
+}
+
+#[inline]
+fn composite(o: &mut u128, d: &mut bool, col: u128, aq: u128, one: u128, q: u32, quant: Quant) {
+    if !*d {
+        *o = col;
+        *d = true;
+    } else {
+        let num = col * aq + *o * (one - aq);
+        *o = round_shift(num as i128, q, quant) as u128;
+    }
+}

@@ -1,0 +1,226 @@
+//! Depth layers (docs/reference.md §3): the depth image, the layer plan grown far to near,
+//! and each layer's bounding box and work for the cycle model.
+
+use super::lens::{LensMap, SIGMA_FRAC};
+use super::mask::{half_size, mask_difference, taps_f64, taps_fixed};
+use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
+use serde::Serialize;
+
+/// One depth layer.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Layer {
+    /// Farthest depth code in the layer (`u32::MAX` = background).
+    pub key_far: u32,
+    /// Nearest depth code in the layer.
+    pub key_near: u32,
+    /// Screen z range (near, far).
+    pub z_range: (f64, f64),
+    /// Screen z of the middle depth.
+    pub z_mid: f64,
+    /// Sigma of the middle depth (pixels, from its fixed code).
+    pub sigma: f64,
+    /// Mask half-size.
+    pub m: usize,
+    /// Pixels whose depth falls in the layer.
+    pub pixels: u64,
+    /// Quantised 1-D taps (sum `2^coef_bits`).
+    #[serde(skip)]
+    pub coef: Vec<u64>,
+    /// Float 1-D taps (sum 1).
+    #[serde(skip)]
+    pub coef_f: Vec<f64>,
+}
+
+/// A depth image: values, depth codes (`u32::MAX` = background), coverage of `n2` samples.
+#[derive(Clone, Copy, Debug)]
+pub struct DepthImage<'a, T> {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// Values (frame codes or frame LSBs), row-major.
+    pub value: &'a [T],
+    /// Depth codes.
+    pub key: &'a [u32],
+    /// Covered samples per pixel.
+    pub cov: &'a [u16],
+    /// Samples per pixel.
+    pub n2: u32,
+}
+
+impl<'a, T> DepthImage<'a, T> {
+    /// The frame memory's depth and coverage with `value` (fixed frame codes, or the same
+    /// frame as reals) as the values.
+    pub fn of_frame(frame: &'a crate::stage::accumulate::Frame, value: &'a [T], n2: u32) -> Self {
+        Self {
+            width: frame.width as usize,
+            height: frame.height as usize,
+            value,
+            key: &frame.depth,
+            cov: &frame.coverage,
+            n2,
+        }
+    }
+}
+
+/// The layer plan: layers far to near and each pixel's layer.
+#[derive(Clone, Debug)]
+pub struct LayerPlan {
+    /// Layers, far to near.
+    pub layers: Vec<Layer>,
+    /// Layer index of each pixel.
+    pub index: Vec<u16>,
+    /// Index of the layer holding the background (uncovered shares), if any.
+    pub background: Option<usize>,
+}
+
+/// Grows the layers far to near (see the module notes). Errors name the limit exceeded.
+pub fn plan_layers(
+    key: &[u32],
+    cov: &[u16],
+    n2: u32,
+    lens: &LensMap,
+    p: &DofCfg,
+) -> Result<LayerPlan, String> {
+    let mut keys: Vec<u32> = key.to_vec();
+    if cov.iter().any(|&c| (c as u32) < n2) {
+        keys.push(u32::MAX);
+    }
+    keys.sort_unstable_by(|a, b| b.cmp(a));
+    keys.dedup();
+    let sig = |k: u32| lens.sigma_code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
+    let mid_sigma = |far: u32, near: u32| {
+        let zm = (lens.z_of(far) + lens.z_of(near)) / 2.0;
+        // The middle depth as a code (the background's z_inf is exact): sigma from its code.
+        let code = lens.z_code(zm);
+        let c = if code >= i64::from(u32::MAX) {
+            u32::MAX
+        } else {
+            code.max(0) as u32
+        };
+        (zm, sig(c))
+    };
+    let mut layers: Vec<Layer> = Vec::new();
+    let mut i = 0;
+    while i < keys.len() {
+        let far = keys[i];
+        let s_far = sig(far);
+        let mut j = i;
+        while j + 1 < keys.len() {
+            let near = keys[j + 1];
+            let s_near = sig(near);
+            let (_, s_mid) = mid_sigma(far, near);
+            let mut ok = mask_difference(s_far, s_near, p.k) < p.p
+                && mask_difference(s_mid, s_far, p.k) < p.p
+                && mask_difference(s_mid, s_near, p.k) < p.p;
+            if ok && (s_far.signum() * s_near.signum() < 0.0) {
+                ok = mask_difference(s_mid, 0.0, p.k) < p.p;
+            }
+            if !ok {
+                break;
+            }
+            j += 1;
+        }
+        let near = keys[j];
+        let (z_mid, sigma) = mid_sigma(far, near);
+        let m = half_size(sigma, p.k);
+        if m > p.max_half_size as usize {
+            return Err(format!(
+                "a layer at screen z {z_mid:.4} needs sigma {sigma:.2} px, a mask half-size M = {m} > dof.max_half_size = {}; raise dof.max_half_size (at most {MAX_HALF_SIZE_LIMIT}) or reduce the lens radius",
+                p.max_half_size
+            ));
+        }
+        let coef_f = taps_f64(sigma, p.k);
+        let coef = taps_fixed(&coef_f, p.coef_bits);
+        layers.push(Layer {
+            key_far: far,
+            key_near: near,
+            z_range: (lens.z_of(near), lens.z_of(far)),
+            z_mid,
+            sigma,
+            m,
+            pixels: 0,
+            coef,
+            coef_f,
+        });
+        i = j + 1;
+    }
+    let find = |k: u32| -> usize {
+        // layers are ordered by descending key ranges
+        layers.partition_point(|l| l.key_near > k)
+    };
+    let index: Vec<u16> = key.iter().map(|&k| find(k) as u16).collect();
+    for &l in &index {
+        layers[l as usize].pixels += 1;
+    }
+    let background = if keys.first() == Some(&u32::MAX) {
+        Some(0)
+    } else {
+        None
+    };
+    Ok(LayerPlan {
+        layers,
+        index,
+        background,
+    })
+}
+
+/// One layer as the cycle model sees it: the pixels of its box (both passes produce one
+/// output sample per box pixel; a sigma = 0 layer passes its box through) and its taps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct LayerWork {
+    /// Pixels of the layer's box (input widened by M, clipped to the image).
+    pub pixels: u64,
+    /// Mask taps `2M + 1` (1: passed through).
+    pub taps: u32,
+}
+
+/// The layers [`layered_fixed`](super::layered_fixed) processes, in its order, with their boxes.
+pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWork> {
+    plan.layers
+        .iter()
+        .enumerate()
+        .filter_map(|(l, layer)| {
+            let all = plan.background == Some(l);
+            let (x0, y0, x1, y1) = layer_box(width, height, &plan.index, l, layer.m, all)?;
+            Some(LayerWork {
+                pixels: ((x1 - x0) * (y1 - y0)) as u64,
+                taps: 2 * layer.m as u32 + 1,
+            })
+        })
+        .collect()
+}
+
+/// Bounding box (x0, y0, x1, y1 exclusive) of a layer's input, widened by M and clipped.
+pub(super) fn layer_box(
+    w: usize,
+    h: usize,
+    idx: &[u16],
+    l: usize,
+    m: usize,
+    all: bool,
+) -> Option<(usize, usize, usize, usize)> {
+    if all {
+        return Some((0, 0, w, h));
+    }
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            if idx[y * w + x] as usize == l {
+                x0 = x0.min(x);
+                y0 = y0.min(y);
+                x1 = x1.max(x + 1);
+                y1 = y1.max(y + 1);
+            }
+        }
+    }
+    if x0 == usize::MAX {
+        return None;
+    }
+    Some((
+        x0.saturating_sub(m),
+        y0.saturating_sub(m),
+        (x1 + m).min(w),
+        (y1 + m).min(h),
+    ))
+}
