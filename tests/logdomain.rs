@@ -26,6 +26,7 @@ fn cfg(bits: u32, fa: u32, tf: u32, a: u32, interp: bool) -> CodingCfg {
         table_addr_bits: a,
         table_frac_bits: tf,
         interpolate: interp,
+        ..CodingCfg::linear()
     }
 }
 
