@@ -1,14 +1,16 @@
 //! The `logdomain` stage: log code and encoder, potentiation LUT, Gaussian-log adder
 //! (exhaustive over 8-bit code pairs), eq. 15 gamma LUT, chains of additions, hard cases,
-//! ramp contours, the pipeline plan and the CLI's bad-input messages.
+//! ramp contours, the pipeline plan and the CLI's bad-input messages; the fixed-point
+//! discipline: ROM builds through the quantiser (contents unchanged), counted overflows of
+//! the log adder and the term floor, `coding.overflow = "ERROR"`.
 
 mod common;
 
-use common::igemu;
+use common::{hw, igemu, point, scene};
 
 use igemu::compare::DisplayModel;
 use igemu::config::{CodingCfg, CodingKind, DitherKind};
-use igemu::fixed::Quant;
+use igemu::fixed::{Overflow, QFormat, Quant};
 use igemu::stage::gamma::GammaSpec;
 use igemu::stage::logdomain::*;
 
@@ -26,6 +28,7 @@ fn cfg(bits: u32, fa: u32, tf: u32, a: u32, interp: bool) -> CodingCfg {
         table_addr_bits: a,
         table_frac_bits: tf,
         interpolate: interp,
+        ..CodingCfg::linear()
     }
 }
 
@@ -146,7 +149,7 @@ fn adder_hard_cases() {
     assert_eq!(add.sb_lookup(ez + 1), 0);
     // Zero intensity: black samples sum to black (code `off`, L = 0) over a full tent window.
     let k = igemu::stage::accumulate::Kernel::new(igemu::config::FilterKind::Tent, 4, 10, 0.5);
-    let mut w = LogWork::default();
+    let mut w = LogWork::new(&add);
     let black = accumulate_pixel(&add, k.w.iter().map(|&w| (0, w)), &mut w);
     assert!(
         (black - add.off).abs() <= 2,
@@ -351,6 +354,11 @@ fn cli_bad_input_exits_2_with_field_and_range() {
             "coding.acc_frac_bits",
             "0..=8",
         ),
+        (
+            "[coding]\nkind = \"log-add\"\noverflow = \"WRAP\"\n",
+            "coding.overflow",
+            "SAT or ERROR",
+        ),
     ] {
         let p = write("hw.toml", toml);
         let (code, _, err) = igemu(&["render", "--hw", &p, "-o", "/dev/null"]);
@@ -512,4 +520,280 @@ fn log_add_refuses_depth_of_field_and_dither() {
     hw.dither.kind = DitherKind::Bayer4;
     let (field, _) = hw.validate().unwrap_err();
     assert_eq!(field, "dither.kind");
+}
+
+/// The old (pre-quantiser) ROM formulas, written out: `f64::round` / `f64::ceil` casts.
+mod old {
+    use super::*;
+
+    pub fn thresholds(code: LogCode, white: u64) -> Vec<u64> {
+        let g = code.grades() as f64;
+        (1..=code.grades())
+            .map(|c| {
+                let x = code.linear_of_log((c as f64 - 0.5) / g) * white as f64;
+                x.ceil().max(0.0) as u64
+            })
+            .collect()
+    }
+
+    pub fn potentiation(code: LogCode, data_bits: u32) -> Vec<u32> {
+        let w = ((1u64 << data_bits) - 1) as f64;
+        let g = code.grades() as f64;
+        (0..=code.grades())
+            .map(|c| (code.linear_of_log(c as f64 / g) * w).round() as u32)
+            .collect()
+    }
+
+    /// sb table and weight ROM for the adder's own `shift` (the address search is unchanged).
+    pub fn sb_and_log_w(add: &LogAdder) -> (Vec<i64>, Vec<i64>) {
+        let unit = add.unit();
+        let lnk = add.code.k.ln();
+        let data_unit = unit * (1u64 << add.tf) as f64;
+        let sbf = |d: f64| (1.0 + (-d / unit * lnk).exp()).ln() / lnk * data_unit;
+        let n = (1usize << add.addr_bits) + usize::from(add.interpolate);
+        let sb = (0..n)
+            .map(|j| sbf((j as i64 * (1 << add.shift)) as f64).round() as i64)
+            .collect();
+        let log_w = (0..=(1u64 << add.wf))
+            .map(|w| {
+                if w == 0 {
+                    0
+                } else {
+                    ((w as f64 / (1u64 << add.wf) as f64).ln() / lnk * unit).round() as i64
+                }
+            })
+            .collect();
+        (sb, log_w)
+    }
+
+    /// The hand-coded adder: half-up shifts, silent `min`.
+    pub fn add(add: &LogAdder, a: i64, b: i64) -> i64 {
+        if a == ZERO {
+            return b;
+        }
+        if b == ZERO {
+            return a;
+        }
+        let (m, d) = if a >= b { (a, a - b) } else { (b, b - a) };
+        let n = 1i64 << add.addr_bits;
+        let s = add.shift;
+        let sb = if add.interpolate {
+            let j = d >> s;
+            if j >= n {
+                0
+            } else {
+                let fr = d & ((1 << s) - 1);
+                let (x, y) = (add.sb[j as usize], add.sb[j as usize + 1]);
+                if s == 0 {
+                    x
+                } else {
+                    x + (((y - x) * fr + (1 << (s - 1))) >> s)
+                }
+            }
+        } else {
+            let j = if s == 0 { d } else { (d + (1 << (s - 1))) >> s };
+            if j >= n { 0 } else { add.sb[j as usize] }
+        };
+        let v = (m << add.tf) + sb;
+        let r = if add.tf == 0 {
+            v
+        } else {
+            (v + (1 << (add.tf - 1))) >> add.tf
+        };
+        r.min(add.max)
+    }
+}
+
+#[test]
+fn rom_builds_through_the_quantiser_are_unchanged() {
+    let mut adders = 0;
+    for k in [3.0, 100.0, 1000.0] {
+        for bits in 3..=8 {
+            let c = LogCode { k, bits };
+            // Encoder thresholds and potentiation LUT over input / data widths.
+            for (in_bits, int_bits) in [(8, 8), (12, 12), (16, 12), (16, 8)] {
+                let white = ((1u64 << int_bits) - 1) << (in_bits - int_bits);
+                let enc = LogEncoder::new(c, white, in_bits);
+                assert_eq!(enc.thresholds, old::thresholds(c, white), "K {k} b {bits}");
+                assert_eq!(enc.stats.name, "logdomain.threshold");
+                assert_eq!(enc.stats.format, QFormat::new(false, in_bits, 0));
+                assert_eq!(enc.stats.count, c.grades() as u64);
+                assert_eq!(enc.stats.overflows, 0);
+                // A ceiling: every error in [0, 1) LSB, so the mean is in [0, 1).
+                assert!((0.0..1.0).contains(&enc.stats.mean_error()));
+            }
+            for data in 1..=16 {
+                let lut = PotentiationLut::build(c, data);
+                assert_eq!(
+                    lut.table,
+                    old::potentiation(c, data),
+                    "K {k} b {bits} d {data}"
+                );
+                assert_eq!(lut.stats.name, "logdomain.potentiation");
+                assert_eq!(lut.stats.format, QFormat::new(false, data, 0));
+                assert_eq!(lut.stats.max, Some(((1i128) << data) - 1));
+                assert!(lut.stats.rms_error() <= 0.5);
+            }
+            // sb table and weight ROM over the frame / table widths.
+            for fa in 0..=3 {
+                for tf in [0, 1, 2, 4] {
+                    for a in [4, 6, 8] {
+                        for interp in [false, true] {
+                            for (wf, w_min) in [(10, 1), (6, 3), (0, 1)] {
+                                let add =
+                                    LogAdder::new(c, &cfg(bits, fa, tf, a, interp), wf, w_min);
+                                let (sb, log_w) = old::sb_and_log_w(&add);
+                                let at = format!(
+                                    "K {k} b {bits} fa {fa} tf {tf} a {a} {interp} wf {wf}"
+                                );
+                                assert_eq!(add.sb, sb, "{at}");
+                                assert_eq!(add.log_w, log_w, "{at}");
+                                assert_eq!(add.sb_stats.max, Some(sb[0] as i128), "{at}");
+                                assert_eq!(add.sb_stats.format.frac_bits, tf);
+                                assert!(
+                                    add.sb_stats.format.total_bits() >= add.table_data_bits(),
+                                    "{at}"
+                                );
+                                assert_eq!(add.sb_stats.overflows, 0);
+                                assert_eq!(add.log_w_stats.min, Some(log_w[1] as i128), "{at}");
+                                assert_eq!(add.log_w_stats.count, 1 << wf);
+                                assert!(add.log_w_stats.format.signed);
+                                assert_eq!(add.log_w_stats.overflows, 0);
+                                adders += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(adders, 3 * 6 * 4 * 4 * 3 * 2 * 3);
+}
+
+#[test]
+fn adder_rounding_is_the_configured_mode() {
+    // RND (the default) is the old hand-coded adder on every pair of small codes.
+    for c in [
+        cfg(8, 2, 2, 6, false),
+        cfg(8, 2, 3, 6, true),
+        cfg(7, 3, 1, 8, false),
+        cfg(8, 0, 0, 8, true),
+    ] {
+        let add = adder(&c);
+        let top = add.max.min(700);
+        for a in 0..=top {
+            for b in 0..=top {
+                assert_eq!(add.add(a, b), old::add(&add, a, b), "{c:?}: {a} + {b}");
+            }
+        }
+    }
+    // TRN (floor) is what the coding asks for: below RND by at most one LSB, and below it
+    // somewhere.
+    let rnd = adder(&cfg(8, 2, 3, 8, false));
+    let trn = adder(&CodingCfg {
+        quant: Quant::Trn,
+        ..cfg(8, 2, 3, 8, false)
+    });
+    let mut below = 0;
+    for a in (1..=rnd.max).step_by(7) {
+        for b in (1..=rnd.max).step_by(5) {
+            let (r, t) = (rnd.add(a, b), trn.add(a, b));
+            assert!(t == r || t + 1 == r, "{a} + {b}: TRN {t}, RND {r}");
+            below += usize::from(t < r);
+        }
+    }
+    assert!(below > 0, "TRN never rounded differently from RND");
+}
+
+#[test]
+fn log_adder_overflow_and_term_floor_are_counted() {
+    let add = adder(&CodingCfg::preset("log8-logadd").unwrap());
+    let white = add.term(255, 1024);
+    assert_eq!(white, add.max);
+    // Four full-white terms on one pixel: the first is the identity, the three sums above
+    // full white overflow and saturate.
+    let mut w = LogWork::new(&add);
+    let r = accumulate_pixel(&add, (0..4).map(|_| (255, 1024)), &mut w);
+    assert_eq!(r, add.max);
+    assert_eq!(w.frame.name, "logdomain.frame");
+    assert_eq!(w.frame.overflows, 3);
+    assert_eq!(w.frame.count, 4);
+    assert!(w.frame.max.unwrap() > add.max as i128, "{:?}", w.frame.max);
+    assert_eq!(w.saturations, 1, "hit full scale once");
+    assert_eq!(w.term.overflows, 0);
+    let (rounded, q) = add.add_checked(white, white);
+    assert!(q.overflow && q.code == add.max && rounded > add.max);
+    assert!(!add.add_checked(white, ZERO).1.overflow);
+    // A sum landing at most on full white is no overflow.
+    let mut w = LogWork::new(&add);
+    accumulate_pixel(&add, [(255, 512), (255, 512)].into_iter(), &mut w);
+    assert_eq!(w.frame.overflows, 0, "{:?}", w.frame);
+    // The term floor: an adder sized for full weights only (w_min = 2^f) sees a tiny
+    // weight on black, whose term is below code 1.
+    let c = CodingCfg::preset("log8-logadd").unwrap();
+    let add = LogAdder::new(code(8), &c, 10, 1024);
+    assert!(add.term(0, 1) < 1);
+    let mut w = LogWork::new(&add);
+    let r = accumulate_pixel(&add, [(0, 1), (0, 2), (200, 1024)].into_iter(), &mut w);
+    assert_eq!(w.term.name, "logdomain.term");
+    assert_eq!(w.term.overflows, 2, "{:?}", w.term);
+    assert!(w.term.min.unwrap() < 1);
+    assert_eq!(w.term.count, 3);
+    assert!(r >= add.term(200, 1024));
+}
+
+/// Twelve full-white light points on one pixel of a small pinhole scene.
+fn bright_points() -> igemu::scene::Scene {
+    let objects: String = (0..12).map(|_| point(8.0, 8.0, 0.3, 1.0, 2.0)).collect();
+    scene(16, 16, 0.1, &objects)
+}
+
+fn log_signal<'a>(r: &'a igemu::pipeline::Render, name: &str) -> &'a igemu::fixed::SignalStats {
+    let st = r
+        .report
+        .stages
+        .iter()
+        .find(|s| s.name == "logdomain")
+        .expect("logdomain stage");
+    st.signals
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no signal {name}"))
+}
+
+#[test]
+fn log_adder_saturation_is_reported_and_error_mode_stops() {
+    let opts = igemu::pipeline::RenderOptions { stage_local: false };
+    let sat = hw("log8-logadd", |_| {});
+    assert_eq!(sat.coding.overflow, Overflow::Sat);
+    let r = igemu::pipeline::render(&bright_points(), &sat, opts).unwrap();
+    let frame = log_signal(&r, "logdomain.frame");
+    assert!(frame.overflows > 0, "{frame:?}");
+    assert!(r.report.overflows >= frame.overflows);
+    for name in [
+        "logdomain.threshold",
+        "logdomain.log_w",
+        "logdomain.sb",
+        "logdomain.term",
+    ] {
+        let s = log_signal(&r, name);
+        assert!(s.count > 0, "{s:?}");
+    }
+    // ERROR stops the render and names the signal.
+    let err = hw("log8-logadd", |h| h.coding.overflow = Overflow::Error);
+    match igemu::pipeline::render(&bright_points(), &err, opts) {
+        Err(e) => {
+            let m = e.to_string();
+            assert!(m.contains("logdomain.frame") && m.contains("ERROR"), "{m}");
+        }
+        Ok(_) => panic!("coding.overflow = ERROR must stop an overflowing log render"),
+    }
+    // Without the points nothing overflows, and ERROR renders.
+    let plain = scene(16, 16, 0.1, "");
+    let r = igemu::pipeline::render(&plain, &err, opts).unwrap();
+    assert_eq!(log_signal(&r, "logdomain.frame").overflows, 0);
+    // The two new fields are in the report's hardware section.
+    let j = serde_json::to_value(&r.report.hardware.coding).unwrap();
+    assert_eq!(j["quant"], "RND");
+    assert_eq!(j["overflow"], "ERROR");
 }

@@ -2,6 +2,7 @@
 //! one of the two log-domain structures of docs/reference.md §1, Fig. 7).
 
 use super::set;
+use crate::fixed::{Overflow, Quant};
 use serde::{Deserialize, Serialize};
 
 /// Largest sample log-code width.
@@ -37,9 +38,23 @@ pub enum CodingKind {
 /// table_addr_bits = 10    # sb table address, 4..=16 bits
 /// table_frac_bits = 0     # sb table data: fraction bits below the frame LSB, 0..=12
 /// interpolate = false     # linear interpolation between sb entries
+/// quant = "RND"           # log adder: rounding of max + sb to the frame LSB (any mode)
+/// overflow = "SAT"        # log frame word above full white: "SAT" (counted) or "ERROR"
 /// ```
 /// Defaults (all presets): `acc_frac_bits = 2` (`log7-logadd`: 3), `table_addr_bits = 10`,
-/// `table_frac_bits = 0`, `interpolate = false`; linear presets have `kind = "linear"`.
+/// `table_frac_bits = 0`, `interpolate = false`, `quant = "RND"`, `overflow = "SAT"`; linear
+/// presets have `kind = "linear"`.
+///
+/// `quant` and `overflow` are the log adder's (structure b) quantisation point: the sum
+/// `max + sb` carries `table_frac_bits` fraction bits below the frame LSB and is rounded to
+/// it with `quant` (the sum is never negative, so `RND` = `RND_INF`, `RND_ZERO` =
+/// `RND_MIN_INF` and `TRN` = `TRN_ZERO`; the RTL `log_adder.v` rounds `RND`). The frame word
+/// holds `[0, max]` with `max = off + G 2^acc_frac_bits` (full white, not a power of two),
+/// so a sum above full white (light points can exceed white, and rounding can push a
+/// full-white sum one LSB over) overflows: `SAT` clamps it to full white and counts it in
+/// the signal `logdomain.frame`, `ERROR` stops the render with an overflow error naming
+/// that signal. The other overflow modes are refused: wrapping or zeroing a log code would
+/// turn white into black.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CodingCfg {
     /// Linear or one of the two log structures.
@@ -54,6 +69,10 @@ pub struct CodingCfg {
     pub table_frac_bits: u32,
     /// Linear interpolation between sb-table entries (else direct lookup).
     pub interpolate: bool,
+    /// Rounding of the log adder's sum to the frame LSB (structure b); default `RND`.
+    pub quant: Quant,
+    /// Overflow of the log frame word above full white: `SAT` (default) or `ERROR`.
+    pub overflow: Overflow,
 }
 
 impl CodingCfg {
@@ -66,6 +85,8 @@ impl CodingCfg {
             table_addr_bits: 10,
             table_frac_bits: 0,
             interpolate: false,
+            quant: Quant::Rnd,
+            overflow: Overflow::Sat,
         }
     }
 
@@ -103,6 +124,15 @@ impl CodingCfg {
         chk("acc_frac_bits", self.acc_frac_bits, ACC_FRAC_BITS)?;
         chk("table_addr_bits", self.table_addr_bits, TABLE_ADDR_BITS)?;
         chk("table_frac_bits", self.table_frac_bits, TABLE_FRAC_BITS)?;
+        if !matches!(self.overflow, Overflow::Sat | Overflow::Error) {
+            return Err((
+                "coding.overflow".into(),
+                format!(
+                    "must be SAT or ERROR (the log frame word saturates at full white or stops the render), got {}",
+                    self.overflow
+                ),
+            ));
+        }
         Ok(())
     }
 }
@@ -117,6 +147,8 @@ pub(super) struct RawCoding {
     table_addr_bits: Option<u32>,
     table_frac_bits: Option<u32>,
     interpolate: Option<bool>,
+    quant: Option<Quant>,
+    overflow: Option<Overflow>,
 }
 
 impl RawCoding {
@@ -128,5 +160,7 @@ impl RawCoding {
         set(&mut c.table_addr_bits, self.table_addr_bits);
         set(&mut c.table_frac_bits, self.table_frac_bits);
         set(&mut c.interpolate, self.interpolate);
+        set(&mut c.quant, self.quant);
+        set(&mut c.overflow, self.overflow);
     }
 }

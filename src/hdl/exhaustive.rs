@@ -11,6 +11,7 @@ use super::Bench;
 use crate::config::CodingKind;
 use crate::config::HwConfig;
 use crate::error::Result;
+use crate::fixed::Quant;
 use crate::pipeline;
 use crate::scene::Scene;
 use crate::stage::logdomain::{LogAdder, log_code};
@@ -79,6 +80,16 @@ pub fn log_adder_of(scene: &Scene, hw: &HwConfig) -> Result<LogAdder> {
             hw,
             "coding.kind",
             "the log adder needs a log-add coding (e.g. --hw log8-logadd)".into(),
+        ));
+    }
+    if !matches!(hw.coding.quant, Quant::Rnd | Quant::RndInf) {
+        return Err(super::bad(
+            hw,
+            "coding.quant",
+            format!(
+                "the RTL log_adder.v rounds the sum half up (RND; RND_INF is the same on its non-negative sums), got {}",
+                hw.coding.quant
+            ),
         ));
     }
     let f = pipeline::front(scene, hw)?;
