@@ -4,22 +4,21 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use igemu::config::HwConfig;
-use igemu::pipeline::{self, RenderOptions};
+use igemu::pipeline;
 use igemu::scene::Scene;
 use igemu::stage::dof::{
     DepthImage, LensMap, layered_f64, layered_fixed, per_pixel_scatter, plan_layers,
 };
+use igemu::stage::{RunOptions, StageId};
 use std::hint::black_box;
 use std::time::Instant;
 
 fn bench(c: &mut Criterion) {
     let scene = Scene::default_scene();
     let hw = HwConfig::default_config();
-    let opts = RenderOptions { stage_local: false };
-    let f = pipeline::front(&scene, &hw).unwrap();
-    let g = pipeline::geometry(&f, &hw, opts).unwrap();
-    let a = pipeline::accumulate_phase(&f, &g, &hw, opts).unwrap();
-    let fr = &a.frame;
+    let (_, taps) =
+        pipeline::run_through(&scene, &hw, RunOptions::FAST, StageId::Accumulate).unwrap();
+    let fr = &taps.fixed.frame().frame;
     let (w, h) = (fr.width as usize, fr.height as usize);
     let lens =
         LensMap::from_camera(&scene.camera, fr.height, hw.visibility.z.format.frac_bits).unwrap();

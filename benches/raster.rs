@@ -2,31 +2,21 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use igemu::config::HwConfig;
-use igemu::pipeline::{guard_band, region_of};
-use igemu::scene::{Scene, front_end};
-use igemu::stage::input::{self, QPrim};
+use igemu::pipeline;
+use igemu::scene::Scene;
+use igemu::stage::input::QPrim;
 use igemu::stage::raster::{self, FPrim, RasterParams, RasterWork};
 use igemu::stage::setup::{self, SetupWork};
-use igemu::stage::{Grid, StageReport, accumulate};
+use igemu::stage::{RunOptions, StageId};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
     let scene = Scene::default_scene();
     let hw = HwConfig::default_config();
-    let host = front_end(&scene, &guard_band(&scene, &hw).unwrap());
-    let q: Vec<QPrim> = input::quantize(&host, &hw, &mut StageReport::default()).unwrap();
-    let grid = Grid::new(
-        hw.raster.samples,
-        hw.subpixel_bits(),
-        scene.image.width,
-        scene.image.height,
-    );
-    let kernel =
-        accumulate::Kernel::new(hw.accumulate.filter, grid.n, hw.accumulate.weight_bits, 0.5);
-    let reg = accumulate::sample_region(
-        &region_of(&q, &hw, scene.image.width, scene.image.height),
-        &kernel,
-    );
+    let (plan, taps) =
+        pipeline::run_through(&scene, &hw, RunOptions::FAST, StageId::Input).unwrap();
+    let q: &[QPrim] = &taps.fixed.prims().q;
+    let (grid, reg) = (plan.layout.grid, plan.layout.samples);
     let p = RasterParams {
         grid,
         guard: hw.raster.interp_guard_bits,
@@ -41,7 +31,7 @@ fn bench(c: &mut Criterion) {
         let mut out = Vec::new();
         b.iter(|| {
             let (mut sw, mut rw) = (SetupWork::default(), RasterWork::default());
-            for prim in &q {
+            for prim in q {
                 out.clear();
                 raster::raster(
                     &setup::setup(prim, &grid, &mut sw),

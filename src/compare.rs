@@ -5,6 +5,7 @@
 //! `B = B_min + (B_max - B_min) V^gamma` as Weber fractions `|B_fixed - B_ref| / B_ref`.
 
 use crate::scene::Display;
+pub use crate::stage::{WeberCompare, weber_of};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -93,21 +94,6 @@ impl DisplayModel {
     }
 }
 
-/// Luminance-domain comparison.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct WeberCompare {
-    /// The visibility threshold delta from the scene.
-    pub delta: f64,
-    /// Largest Weber fraction.
-    pub max: f64,
-    /// Mean Weber fraction.
-    pub mean: f64,
-    /// Pixels whose error exceeds delta (visible).
-    pub over_delta: u64,
-    /// `over_delta / count`.
-    pub over_delta_fraction: f64,
-}
-
 /// Compares displayed luminance.
 pub fn weber(fixed: &[u16], reference: &[u16], m: &DisplayModel) -> WeberCompare {
     let lum = m.luminance_table();
@@ -118,29 +104,6 @@ pub fn weber(fixed: &[u16], reference: &[u16], m: &DisplayModel) -> WeberCompare
             .map(|(&a, &b)| (lum[a as usize], lum[b as usize])),
         m.weber,
     )
-}
-
-/// Weber statistics of (luminance, reference luminance) pairs against the threshold `delta`.
-pub fn weber_of(pairs: impl Iterator<Item = (f64, f64)>, delta: f64) -> WeberCompare {
-    let mut w = WeberCompare {
-        delta,
-        ..Default::default()
-    };
-    let (mut sum, mut n) = (0.0, 0u64);
-    for (ba, bb) in pairs {
-        let f = (ba - bb).abs() / bb;
-        sum += f;
-        n += 1;
-        w.max = w.max.max(f);
-        if f > delta {
-            w.over_delta += 1;
-        }
-    }
-    if n > 0 {
-        w.mean = sum / n as f64;
-        w.over_delta_fraction = w.over_delta as f64 / n as f64;
-    }
-    w
 }
 
 #[cfg(test)]

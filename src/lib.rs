@@ -16,14 +16,15 @@
 //!
 //! The library prints nothing; the `igemu` binary does.
 
-pub mod calc;
+pub mod analysis;
 pub mod compare;
 pub mod config;
+pub mod cost;
 pub mod cycles;
 pub mod error;
 pub mod files;
 pub mod fixed;
-pub mod flicker;
+pub mod fnv;
 pub mod hdl;
 pub mod output;
 pub mod perceptual;

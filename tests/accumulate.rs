@@ -6,7 +6,8 @@ mod common;
 use common::{hw, point, scene, tri};
 use igemu::config::FilterKind;
 use igemu::fixed::{Overflow, QFormat};
-use igemu::pipeline::{RenderOptions, render};
+use igemu::pipeline::render;
+use igemu::stage::RunOptions;
 use proptest::prelude::*;
 
 /// Total of the frame memory over the image, in frame LSBs.
@@ -17,8 +18,8 @@ fn total(objects: &str, filter: FilterKind, frame_frac: u32, n: u32) -> u64 {
         h.raster.samples = n;
         h.accumulate.frame.format = QFormat::new(false, 12, frame_frac);
     });
-    let r = render(&s, &h, RenderOptions { stage_local: false }).expect("render");
-    r.frame.acc.iter().map(|&a| a as u64).sum()
+    let r = render(&s, &h, RunOptions::FAST).expect("render");
+    r.frame().acc.iter().map(|&a| a as u64).sum()
 }
 
 fn quad(x: f64, y: f64, side: f64, i: f64) -> String {
@@ -94,13 +95,13 @@ fn many_lights(overflow: Overflow) -> igemu::error::Result<igemu::pipeline::Rend
     let objects: String = (0..12).map(|_| point(8.0, 8.0, 0.3, 0.5, 2.0)).collect();
     let s = scene(16, 16, 0.0, &objects);
     let h = hw("linear12", |h| h.accumulate.frame.overflow = overflow);
-    render(&s, &h, RenderOptions::default())
+    render(&s, &h, RunOptions::default())
 }
 
 #[test]
 fn saturation_at_full_white_under_many_overlapping_lights() {
     let r = many_lights(Overflow::Sat).expect("render");
-    assert_eq!(*r.frame.acc.iter().max().unwrap(), 4095);
+    assert_eq!(*r.frame().acc.iter().max().unwrap(), 4095);
     assert!(r.report.overflows > 0, "saturation must be counted");
     assert_eq!(*r.dac.iter().max().unwrap(), 255);
     // The float reference clips at white too: the saturated centre matches.
@@ -109,7 +110,7 @@ fn saturation_at_full_white_under_many_overlapping_lights() {
 
     let wrapped = many_lights(Overflow::Wrap).expect("render");
     assert!(wrapped.report.overflows > 0);
-    assert!(wrapped.frame.acc[centre] < 4095, "WRAP wraps");
+    assert!(wrapped.frame().acc[centre] < 4095, "WRAP wraps");
 
     match many_lights(Overflow::Error) {
         Err(igemu::error::Error::Overflow { signal, .. }) => assert_eq!(signal, "accumulate.frame"),

@@ -1,6 +1,6 @@
 //! Every number of REFERENCE.md §6, to the printed precision, plus error cases.
 
-use igemu::calc::{
+use igemu::analysis::calc::{
     brightness_error_uncorrected, circle_of_confusion, depth_of_field, gaussian_half_size_factor,
     widths,
 };

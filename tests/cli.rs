@@ -149,7 +149,22 @@ fn bad_input_gets_a_message_with_file_line_field_and_range_and_exit_2() {
         &["sigma.toml:2", "gaussian_sigma"],
     );
     expect_error(&["render", "--hw", "linear99"], &["linear99", "linear12"]);
-    expect_error(&["render", "--dump", "nothing"], &["STAGE=PATH"]);
+    expect_error(&["render", "--dump", "nothing"], &["TAP=PATH"]);
+    // The taps derive from the stages: every stage with an image tap is offered.
+    expect_error(
+        &["render", "--dump", "coverage=x.png"],
+        &[
+            "unknown tap `coverage`",
+            "accumulate.coverage",
+            "dof.depth",
+            "gamma.codes",
+        ],
+    );
+    // A stage the plan does not run has no taps (the default scene has no dither).
+    expect_error(
+        &["render", "--dump", "dither=/tmp/igemu-cli-dither.png"],
+        &["`dither` is not in the plan", "dither.kind = \"none\""],
+    );
     expect_error(
         &["widths", "--contrast", "0.5", "--weber", "0.02"],
         &["contrast"],

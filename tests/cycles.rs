@@ -9,15 +9,17 @@ use common::{Rng, hw, point, scene, tri};
 use igemu::config::HwConfig;
 use igemu::config::{CyclesCfg, StageTiming};
 use igemu::cycles::vcd::VcdWriter;
-use igemu::cycles::{self, CYCLE_STAGES, State};
+use igemu::cycles::{self, State};
 use igemu::files::TomlFile;
-use igemu::pipeline::{self, Render, RenderOptions, render};
+use igemu::pipeline::{self, Render, render};
 use igemu::scene::{Lens, Scene};
+use igemu::stage::RunOptions;
+use igemu::stage::StageId;
 use igemu::stage::accumulate::{self, AccParams};
 use proptest::prelude::*;
 
 fn run(s: &Scene, h: &HwConfig) -> Render {
-    render(s, h, RenderOptions { stage_local: false }).unwrap_or_else(|e| panic!("{e}"))
+    render(s, h, RunOptions::FAST).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn work(r: &Render, stage: &str, key: &str) -> u64 {
@@ -160,8 +162,9 @@ fn analytic_bounds_hold_on_random_scenes() {
         let r = run(&s, &HwConfig::default_config());
         for _ in 0..25 {
             let c = random_timing(&mut rng);
-            let (services, _) = r.workload.services(&c);
-            let sim = cycles::simulate(&r.workload, &c, None);
+            let w = r.workload_for(&c);
+            let services: Vec<Vec<u64>> = (0..w.stages.len()).map(|i| w.services(i).0).collect();
+            let sim = cycles::simulate(&w, None);
             let (lo, hi) = sim.bounds();
             assert!(
                 lo <= sim.total_cycles && sim.total_cycles <= hi,
@@ -197,7 +200,7 @@ proptest! {
         h.validate().unwrap();
         let other = run(&s, &h);
         prop_assert_eq!(&base.dac, &other.dac);
-        prop_assert_eq!(&base.frame, &other.frame);
+        prop_assert_eq!(base.frame(), other.frame());
         prop_assert_eq!(&base.dac_ref, &other.dac_ref);
         prop_assert!(other.report.cycles.bounds_hold);
     }
@@ -209,26 +212,33 @@ fn tile_skipping_is_bit_identical_to_the_whole_region() {
     let mut scenes = vec![Scene::default_scene()];
     scenes.extend((0..4).map(|i| random_scene(&mut rng, 120, 90, 2 + 4 * i)));
     for s in &scenes {
-        let h = HwConfig::default_config();
-        let f = pipeline::front(s, &h).unwrap();
-        let g = pipeline::geometry(&f, &h, RenderOptions { stage_local: false }).unwrap();
-        let a =
-            pipeline::accumulate_phase(&f, &g, &h, RenderOptions { stage_local: false }).unwrap();
-        let ap = AccParams {
-            kernel: f.kernel.clone(),
-            i_frac: h.input.intensity.format.frac_bits,
-            frame: h.accumulate.frame,
-        };
-        let (whole, _, _) = accumulate::accumulate(
-            &g.samples,
-            &f.region,
-            &g.points,
-            &ap,
-            f.bg.0,
-            (s.image.width, s.image.height),
-        )
-        .unwrap();
-        assert_eq!(whole, a.frame, "scene {}", s.name);
+        for tile in [4, 16, 64] {
+            let mut h = HwConfig::default_config();
+            h.cycles.tile = tile;
+            let (plan, taps) =
+                pipeline::run_through(s, &h, RunOptions::FAST, StageId::Accumulate).unwrap();
+            let samples = taps.fixed.samples();
+            let ap = AccParams {
+                kernel: accumulate::kernel(&h),
+                i_frac: h.input.intensity.format.frac_bits,
+                frame: h.accumulate.frame,
+            };
+            let (whole, _, _) = accumulate::accumulate(
+                &samples.samples,
+                &plan.layout.region,
+                &samples.points,
+                &ap,
+                samples.bg,
+                (s.image.width, s.image.height),
+            )
+            .unwrap();
+            assert_eq!(
+                &whole,
+                &taps.fixed.frame().frame,
+                "scene {} tile {tile}",
+                s.name
+            );
+        }
     }
 }
 
@@ -240,30 +250,24 @@ fn vcd_trace_reads_back_to_the_reported_counts() {
     h.cycles = random_timing(&mut rng);
     h.cycles.raster.fifo = 1; // force back-pressure
     let r = run(&s, &h);
-    let fifo: Vec<bool> = (0..CYCLE_STAGES.len())
-        .map(|i| r.workload.has_fifo(i))
-        .collect();
-    let mut w = VcdWriter::new(Vec::new(), &fifo, h.cycles.clock_mhz).unwrap();
+    let mut w = VcdWriter::new(Vec::new(), &r.workload, h.cycles.clock_mhz).unwrap();
     let sim = cycles::simulate(
         &r.workload,
-        &h.cycles,
         Some(&mut |t, st: &[State], occ: &[u32]| w.cycle(t, st, occ)),
     );
+    let names: Vec<&str> = r.workload.stages.iter().map(|s| s.id.name()).collect();
     assert_eq!(sim.total_cycles, r.report.cycles.total_cycles);
     let bytes = w.finish(sim.total_cycles).unwrap();
 
     let mut p = vcd::Parser::new(std::io::BufReader::new(&bytes[..]));
     let header = p.parse_header().unwrap();
     let code = |name: &str| header.find_var(&["igemu", name]).map(|v| v.code);
-    let state_codes: Vec<_> = CYCLE_STAGES
+    let state_codes: Vec<_> = names
         .iter()
         .map(|n| code(&format!("{n}_state")).unwrap())
         .collect();
-    let fifo_codes: Vec<_> = CYCLE_STAGES
-        .iter()
-        .map(|n| code(&format!("{n}_fifo")))
-        .collect();
-    let ns = CYCLE_STAGES.len();
+    let fifo_codes: Vec<_> = names.iter().map(|n| code(&format!("{n}_fifo"))).collect();
+    let ns = names.len();
     let mut state = vec![0u64; ns];
     let mut occ = vec![0u64; ns];
     let mut counts = vec![[0u64; 4]; ns];
@@ -297,9 +301,20 @@ fn vcd_trace_reads_back_to_the_reported_counts() {
     }
     assert_eq!(last_time, r.report.cycles.total_cycles);
     // The report lists the planned cycle stages (no dof row for this pinhole scene).
-    assert_eq!(r.report.cycles.stages.len(), CYCLE_STAGES.len() - 1);
+    assert_eq!(
+        names,
+        [
+            "input",
+            "setup",
+            "raster",
+            "visibility",
+            "accumulate",
+            "gamma"
+        ]
+    );
+    assert_eq!(r.report.cycles.stages.len(), names.len());
     for st in &r.report.cycles.stages {
-        let i = CYCLE_STAGES.iter().position(|n| *n == st.name).unwrap();
+        let i = names.iter().position(|n| *n == st.name).unwrap();
         assert_eq!(counts[i][State::Idle as usize], st.idle, "{} idle", st.name);
         assert_eq!(counts[i][State::Busy as usize], st.busy, "{} busy", st.name);
         assert_eq!(
@@ -351,10 +366,17 @@ fn thin_lens_scene_runs_dof_on_the_finished_frame_then_gamma() {
     let (acc, dof, gamma) = (st("accumulate"), st("dof"), st("gamma"));
     // One token per layer with a box; both passes emit one sample per box pixel; two
     // samples per clock (the h and v port groups of dof_row_mac).
-    let layers = &r.workload.dof;
+    let dof_stage = r
+        .workload
+        .stages
+        .iter()
+        .find(|s| s.id == StageId::Dof)
+        .unwrap();
+    // Items per layer token: 2 x the pixels of its box.
+    let layers: Vec<u64> = dof_stage.items.iter().map(|&i| i / 2).collect();
     assert!(layers.len() >= 2 && layers.len() as u64 <= work(&r, "dof", "layers"));
     assert_eq!(dof.tokens, layers.len() as u64);
-    let px: u64 = layers.iter().map(|l| l.pixels).sum();
+    let px: u64 = layers.iter().sum();
     assert_eq!(dof.items, 2 * px);
     assert_eq!(dof.busy, px);
     // Depth of field blurs the whole screen, so gamma converts every pixel, row by row.
@@ -376,10 +398,7 @@ fn thin_lens_scene_runs_dof_on_the_finished_frame_then_gamma() {
         .iter()
         .find(|s| s.name == "dof")
         .unwrap();
-    assert_eq!(
-        d4.busy,
-        layers.iter().map(|l| l.pixels.div_ceil(2)).sum::<u64>()
-    );
+    assert_eq!(d4.busy, layers.iter().map(|l| l.div_ceil(2)).sum::<u64>());
     assert!(r4.report.cycles.total_cycles < c.total_cycles);
     assert_eq!(r4.dac, r.dac);
 }
@@ -399,11 +418,11 @@ fn quarter_screen_scene_simulates_only_that_quarter() {
     let c = &r.report.cycles;
     assert_eq!(c.plan.tiles_total, 64);
     assert_eq!(c.plan.tiles_touched, 16);
+    let tiles = &r.plan.layout.tiles;
     assert!(
-        r.workload
-            .tiles
-            .iter()
-            .all(|t| t.tile % 8 < 4 && t.tile / 8 < 4)
+        (0..tiles.touched.len())
+            .filter(|&t| tiles.touched[t])
+            .all(|t| t % 8 < 4 && t / 8 < 4)
     );
     assert!(c.plan.pixels_simulated <= 64 * 64);
     assert_eq!(c.plan.pixels_simulated, work(&r, "accumulate", "pixels"));
@@ -421,7 +440,7 @@ fn quarter_screen_scene_simulates_only_that_quarter() {
 }
 
 #[test]
-fn cost_storage_is_exact_and_packs_with_bitvec() {
+fn cost_storage_is_exact() {
     let s = Scene::default_scene();
     let h = HwConfig::default_config();
     let r = run(&s, &h);
@@ -429,60 +448,14 @@ fn cost_storage_is_exact_and_packs_with_bitvec() {
     let (w, ht) = (640u64, 480u64);
     assert_eq!(k.storage_bits["accumulate"], w * ht * 12);
     // 16 samples per pixel x (24-bit z + 16-bit intensity + primitive id bits).
-    let prims = r.workload.prims.len() as u64;
+    let prims = work(&r, "input", "primitives");
     let id_bits = (prims + 1).next_power_of_two().trailing_zeros() as u64;
     assert_eq!(
         k.storage_bits["visibility"],
         w * ht * 16 * (24 + 16 + id_bits)
     );
     assert_eq!(k.rom_bits["gamma"], 4096 * 8);
-    assert_eq!(k.packed.len(), 3);
-    for p in &k.packed {
-        assert!(p.verified, "{p:?}");
-        assert_eq!(
-            p.bits,
-            p.words * p.fields.iter().map(|&f| f as u64).sum::<u64>()
-        );
-    }
-    assert_eq!(k.packed[0].bits, k.storage_bits["accumulate"]);
-    assert_eq!(k.packed[1].bits, k.rom_bits["gamma"]);
-    // A word that does not fit its field is caught.
-    let bad = cycles::cost::pack("t", 2, &[4], 8, |r, _| [3, 17][r]);
-    assert!(!bad.verified);
-    let good = cycles::cost::pack("t", 2, &[5], 10, |r, _| [3, 17][r]);
-    assert!(good.verified);
-    // Records wider than 64 bits, 64-bit fields, odd widths: every value fits and reads back.
-    let mut rng = Rng(5);
-    for fields in [
-        vec![64],
-        vec![64, 7, 33],
-        vec![1, 63, 1],
-        vec![13, 24, 11],
-        vec![3],
-    ] {
-        let wb: u64 = fields.iter().map(|&f| f as u64).sum();
-        let vals: Vec<u64> = (0..101 * fields.len())
-            .map(|i| {
-                let f = fields[i % fields.len()];
-                rng.next_u64() >> (64 - f)
-            })
-            .collect();
-        let n = fields.len();
-        let p = cycles::cost::pack("t", 101, &fields, 101 * wb, |r, k| vals[r * n + k]);
-        assert!(p.verified, "{fields:?}");
-        // One value one bit too wide is caught.
-        let last = fields.len() - 1;
-        if fields[last] < 64 {
-            let p = cycles::cost::pack("t", 101, &fields, 101 * wb, |r, k| {
-                if (r, k) == (50, last) {
-                    1 << fields[last]
-                } else {
-                    vals[r * n + k]
-                }
-            });
-            assert!(!p.verified, "{fields:?}");
-        }
-    }
+    assert!(k.packed.iter().all(|p| p.verified), "{:?}", k.packed);
 }
 
 #[test]

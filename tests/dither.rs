@@ -9,7 +9,8 @@ use igemu::config::HwConfig;
 use igemu::config::{DitherCfg, DitherKind, Placement};
 use igemu::files::TomlFile;
 use igemu::fixed::QFormat;
-use igemu::pipeline::{RenderOptions, render};
+use igemu::pipeline::render;
+use igemu::stage::RunOptions;
 use igemu::stage::dither::{Dither, Mask, ordered_code, ordered_f64, period_mean};
 
 const KINDS: [DitherKind; 5] = [
@@ -373,7 +374,7 @@ fn dither_config_section_and_plan() {
         ),
     );
     let names = |h: &HwConfig| -> Vec<String> {
-        render(&sc, h, RenderOptions::default())
+        render(&sc, h, RunOptions::default())
             .unwrap()
             .report
             .plan
@@ -410,7 +411,7 @@ fn every_kind_and_placement_renders_comparably_to_the_float_reference() {
                 h.dither.kind = kind;
                 h.dither.placement = placement;
             });
-            let r = render(&sc, &h, RenderOptions::default()).unwrap();
+            let r = render(&sc, &h, RunOptions::default()).unwrap();
             let d = r.report.stages.iter().find(|s| s.name == "dither").unwrap();
             let local = d.local.as_ref().unwrap();
             if kind != DitherKind::FloydSteinberg {
@@ -450,7 +451,7 @@ fn slow_dark_ramp_contours_vanish_with_dither() {
         [0.05, 0.05, 0.02],
     );
     let sc = scene(w as u32, h as u32, 0.0, &objs);
-    let opts = RenderOptions { stage_local: false };
+    let opts = RunOptions::FAST;
     let none = render(&sc, &HwConfig::default_config(), opts).unwrap();
     let k = &none.report.contours;
     eprintln!("ramp without dither: {k:?}");

@@ -7,8 +7,9 @@ use common::Rng;
 use igemu::config::DofCfg;
 use igemu::config::HwConfig;
 use igemu::fixed::{Overflow, QFormat, Quant, round_shift};
-use igemu::pipeline::{self, RenderOptions};
+use igemu::pipeline;
 use igemu::scene::Scene;
+use igemu::stage::RunOptions;
 use igemu::stage::dof::{
     DepthImage, G_FRAC, LayerPlan, LensMap, SIGMA_FRAC, additive_layered, difference_degree,
     edge_band, layered_f64, layered_fixed, per_pixel_scatter, plan_layers, region_error, taps_f64,
@@ -135,12 +136,22 @@ fn theorem_additive_layered_within_p_on_random_depth_images() {
     }
 }
 
-/// The default scene's frame before the dof stage.
-fn default_frame(scene: &Scene, hw: &HwConfig) -> pipeline::Accumulated {
-    let opts = RenderOptions { stage_local: false };
-    let f = pipeline::front(scene, hw).unwrap();
-    let g = pipeline::geometry(&f, hw, opts).unwrap();
-    pipeline::accumulate_phase(&f, &g, hw, opts).unwrap()
+/// The default scene's frame memory before the dof stage (the taps after accumulate).
+struct Before {
+    frame: igemu::stage::accumulate::Frame,
+}
+
+fn default_frame(scene: &Scene, hw: &HwConfig) -> Before {
+    let (_, taps) = pipeline::run_through(
+        scene,
+        hw,
+        RunOptions::FAST,
+        igemu::stage::StageId::Accumulate,
+    )
+    .unwrap();
+    Before {
+        frame: taps.fixed.frame().frame.clone(),
+    }
 }
 
 #[test]
@@ -533,12 +544,7 @@ fn out_saturations_to_a_narrow_frame_format_are_counted() {
 #[test]
 fn dof_stage_reports_the_out_signal_in_the_frame_format() {
     let hw = HwConfig::default_config();
-    let r = pipeline::render(
-        &Scene::default_scene(),
-        &hw,
-        RenderOptions { stage_local: false },
-    )
-    .unwrap();
+    let r = pipeline::render(&Scene::default_scene(), &hw, RunOptions::FAST).unwrap();
     let d = r.report.stages.iter().find(|s| s.name == "dof").unwrap();
     let names: Vec<&str> = d.signals.iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, ["dof.line", "dof.acc", "dof.out"]);
@@ -700,19 +706,14 @@ fn quantised_lens_constants_agree_with_f64_round_at_the_format_edges() {
 #[test]
 fn pinhole_plans_no_dof_stage_thin_lens_does() {
     let hw = HwConfig::default_config();
-    let r = pipeline::render(
-        &Scene::default_scene(),
-        &hw,
-        RenderOptions { stage_local: false },
-    )
-    .unwrap();
+    let r = pipeline::render(&Scene::default_scene(), &hw, RunOptions::FAST).unwrap();
     assert!(r.report.plan.stages.iter().any(|s| s == "dof"));
     let mut s = Scene::default_scene();
     s.camera.lens = igemu::scene::Lens::Pinhole;
-    let r = pipeline::render(&s, &hw, RenderOptions { stage_local: false }).unwrap();
+    let r = pipeline::render(&s, &hw, RunOptions::FAST).unwrap();
     assert!(!r.report.plan.stages.iter().any(|s| s == "dof"));
     let c = Scene::embedded("cone-focus").expect("embedded cone-focus scene");
-    let r = pipeline::render(&c, &hw, RenderOptions { stage_local: false }).unwrap();
+    let r = pipeline::render(&c, &hw, RunOptions::FAST).unwrap();
     let d = r.report.stages.iter().find(|s| s.name == "dof").unwrap();
     assert!(d.work["layers"] >= 3);
 }

@@ -6,8 +6,8 @@ mod common;
 
 use common::igemu;
 
+use igemu::analysis::flicker::{FlickerReport, flicker};
 use igemu::config::{FilterKind, HwConfig};
-use igemu::flicker::{FlickerReport, flicker};
 
 fn run(filter: FilterKind, correction: bool, phases: u32) -> FlickerReport {
     let mut hw = HwConfig::default_config();
@@ -16,7 +16,7 @@ fn run(filter: FilterKind, correction: bool, phases: u32) -> FlickerReport {
     flicker(&hw, phases).unwrap()
 }
 
-fn obj<'a>(r: &'a FlickerReport, name: &str) -> &'a igemu::flicker::ObjectFlicker {
+fn obj<'a>(r: &'a FlickerReport, name: &str) -> &'a igemu::analysis::flicker::ObjectFlicker {
     r.objects.iter().find(|o| o.object == name).unwrap()
 }
 

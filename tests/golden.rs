@@ -5,8 +5,9 @@
 //! those of x86_64 Linux with this toolchain (the CI machine).
 
 use igemu::config::HwConfig;
-use igemu::pipeline::{RenderOptions, render};
+use igemu::pipeline::render;
 use igemu::scene::Scene;
+use igemu::stage::RunOptions;
 
 /// FNV-1a over the codes as little-endian u16.
 fn fnv(codes: &[u16]) -> u64 {
@@ -23,7 +24,7 @@ fn check(scene: &str, preset: &str, expected: u64) {
     let r = render(
         &s,
         &HwConfig::preset(preset).expect("preset"),
-        RenderOptions { stage_local: false },
+        RunOptions::FAST,
     )
     .expect("render");
     let got = fnv(&r.dac);

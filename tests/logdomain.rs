@@ -8,6 +8,7 @@ mod common;
 
 use common::{hw, igemu, point, scene};
 
+use igemu::analysis::widths::*;
 use igemu::compare::DisplayModel;
 use igemu::config::{CodingCfg, CodingKind, DitherKind};
 use igemu::fixed::{Overflow, QFormat, Quant};
@@ -398,7 +399,7 @@ fn cli_bad_input_exits_2_with_field_and_range() {
 fn plan_lists_the_log_stage_only_for_log_coding() {
     // A pinhole camera: the log-add frame memory is log-coded and plans no dof stage.
     let scene = igemu::scene::Scene::embedded("default-pinhole").unwrap();
-    let opts = igemu::pipeline::RenderOptions { stage_local: false };
+    let opts = igemu::stage::RunOptions::FAST;
     for (preset, stages) in [
         ("linear12", "input setup raster visibility accumulate gamma"),
         (
@@ -407,18 +408,21 @@ fn plan_lists_the_log_stage_only_for_log_coding() {
         ),
         (
             "log8-logadd",
-            "input setup raster visibility logdomain gamma",
+            "input setup raster visibility logdomain accumulate gamma",
         ),
     ] {
         let hw = igemu::config::HwConfig::preset(preset).unwrap();
         let r = igemu::pipeline::render(&scene, &hw, opts).unwrap();
         assert_eq!(r.report.plan.stages.join(" "), stages, "{preset}");
         if preset == "log8-logadd" {
-            let log = &r.report.stages[4];
+            // The accumulate stage sums in the log domain: structure (b) has no multiplier.
+            let acc = &r.report.stages[5];
+            assert_eq!(acc.name, "accumulate");
             assert!(
-                log.cost.multipliers.is_empty(),
+                acc.cost.multipliers.is_empty(),
                 "structure (b) has no multiplier"
             );
+            assert!(acc.work.contains_key("log_adds"), "{:?}", acc.work);
             // Most DAC codes within one code of the float reference.
             let c = &r.report.end_to_end.codes;
             let near = c
@@ -511,7 +515,7 @@ fn cli_widths_scene_validates_by_emulation() {
 #[test]
 fn log_add_refuses_depth_of_field_and_dither() {
     let hw = igemu::config::HwConfig::preset("log8-logadd").unwrap();
-    let opts = igemu::pipeline::RenderOptions { stage_local: false };
+    let opts = igemu::stage::RunOptions::FAST;
     match igemu::pipeline::render(&igemu::scene::Scene::default_scene(), &hw, opts) {
         Err(e) => assert!(e.to_string().contains("coding.kind"), "{e}"),
         Ok(_) => panic!("a thin-lens scene with log-add must be refused"),
@@ -748,22 +752,21 @@ fn bright_points() -> igemu::scene::Scene {
     scene(16, 16, 0.1, &objects)
 }
 
+/// A signal of the log arithmetic: the encoder's on the logdomain stage, the log adder's on
+/// the accumulate stage (which sums in the log domain).
 fn log_signal<'a>(r: &'a igemu::pipeline::Render, name: &str) -> &'a igemu::fixed::SignalStats {
-    let st = r
-        .report
+    r.report
         .stages
         .iter()
-        .find(|s| s.name == "logdomain")
-        .expect("logdomain stage");
-    st.signals
-        .iter()
+        .filter(|s| s.name == "logdomain" || s.name == "accumulate")
+        .flat_map(|s| &s.signals)
         .find(|s| s.name == name)
         .unwrap_or_else(|| panic!("no signal {name}"))
 }
 
 #[test]
 fn log_adder_saturation_is_reported_and_error_mode_stops() {
-    let opts = igemu::pipeline::RenderOptions { stage_local: false };
+    let opts = igemu::stage::RunOptions::FAST;
     let sat = hw("log8-logadd", |_| {});
     assert_eq!(sat.coding.overflow, Overflow::Sat);
     let r = igemu::pipeline::render(&bright_points(), &sat, opts).unwrap();

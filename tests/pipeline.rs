@@ -5,12 +5,13 @@ mod common;
 
 use common::{Rng, hw, line, point, scene, tri};
 use igemu::config::{FilterKind, HwConfig};
-use igemu::pipeline::{Render, RenderOptions, render};
+use igemu::pipeline::{Render, render};
 use igemu::scene::Scene;
+use igemu::stage::RunOptions;
 use proptest::prelude::*;
 
 fn run(s: &Scene, h: &HwConfig) -> Render {
-    render(s, h, RenderOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+    render(s, h, RunOptions::default()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
@@ -32,7 +33,7 @@ fn default_scene_renders_and_reports_every_stage() {
     // The plan is a subsequence of the flow order.
     let pos: Vec<usize> = names
         .iter()
-        .map(|n| igemu::stage::STAGES.iter().position(|s| s == n).unwrap())
+        .map(|n| igemu::stage::StageId::parse(n).unwrap().index())
         .collect();
     assert!(pos.windows(2).all(|w| w[0] < w[1]));
     assert_eq!(r.dac.len(), 640 * 480);
@@ -74,7 +75,7 @@ fn bit_identical_across_runs_and_thread_counts() {
         .install(|| run(&s, &h));
     let again = run(&s, &h);
     assert_eq!(one.dac, two.dac);
-    assert_eq!(one.frame, two.frame);
+    assert_eq!(one.frame(), two.frame());
     assert_eq!(one.dac, again.dac);
     assert_eq!(one.dac_ref, two.dac_ref);
 }
@@ -196,7 +197,7 @@ fn smooth_dark_ramp_stays_monotone_and_close_to_the_reference() {
         // Near black one frame LSB is many DAC codes (about 8 at code 1 with gamma 2.4), so
         // bound the error in the frame-memory domain: within one LSB of the exact value.
         let frame_err = (4 * 256 + 1..5 * 256 - 1)
-            .map(|i| (r.frame.acc[i] as f64 - r.frame_ref[i]).abs())
+            .map(|i| (r.frame().acc[i] as f64 - r.frame_ref()[i]).abs())
             .fold(0.0, f64::max);
         eprintln!("dark ramp {preset}: max frame error {frame_err:.3} LSB");
         assert!(frame_err <= 1.0, "{preset}: {frame_err}");

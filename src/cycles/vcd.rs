@@ -5,7 +5,7 @@
 //! feeds a FIFO, `<stage>_fifo` (its occupancy in tokens). The value at time `t` holds
 //! during cycle `t`; the dump ends with a time stamp equal to the frame's total cycles.
 
-use super::{CYCLE_STAGES, State};
+use super::{State, Workload};
 use std::io::{self, Write};
 
 /// Streams value changes to `out`.
@@ -24,15 +24,17 @@ fn id(i: usize, fifo: bool) -> String {
 }
 
 impl<W: Write> VcdWriter<W> {
-    /// Writes the header; `fifo[i]` tells whether stage `i` has a FIFO to the next stage.
-    pub fn new(mut out: W, fifo: &[bool], clock_mhz: f64) -> io::Result<Self> {
+    /// Writes the header for the stages of `w` (a `_fifo` signal for each stage with a FIFO).
+    pub fn new(mut out: W, w: &Workload, clock_mhz: f64) -> io::Result<Self> {
+        let fifo: Vec<bool> = (0..w.stages.len()).map(|i| w.has_fifo(i)).collect();
         writeln!(
             out,
             "$comment igemu cycle trace: 1 time unit = 1 clock cycle at {clock_mhz} MHz; state 0 idle, 1 busy, 2 stalled, 3 starved $end"
         )?;
         writeln!(out, "$timescale 1 ns $end")?;
         writeln!(out, "$scope module igemu $end")?;
-        for (i, name) in CYCLE_STAGES.iter().enumerate() {
+        for (i, s) in w.stages.iter().enumerate() {
+            let name = s.id.name();
             writeln!(out, "$var wire 2 {} {name}_state $end", id(i, false))?;
             if fifo[i] {
                 writeln!(out, "$var wire 32 {} {name}_fifo $end", id(i, true))?;
@@ -42,9 +44,9 @@ impl<W: Write> VcdWriter<W> {
         writeln!(out, "$enddefinitions $end")?;
         Ok(Self {
             out,
-            fifo: fifo.to_vec(),
-            last_state: vec![u8::MAX; fifo.len()],
-            last_occ: vec![u32::MAX; fifo.len()],
+            fifo,
+            last_state: vec![u8::MAX; w.stages.len()],
+            last_occ: vec![u32::MAX; w.stages.len()],
             started: false,
             err: None,
         })

@@ -12,7 +12,6 @@ use crate::config::CodingKind;
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::fixed::Quant;
-use crate::pipeline;
 use crate::scene::Scene;
 use crate::stage::logdomain::{LogAdder, log_code};
 use crate::stage_id::StageId;
@@ -92,8 +91,7 @@ pub fn log_adder_of(scene: &Scene, hw: &HwConfig) -> Result<LogAdder> {
             ),
         ));
     }
-    let f = pipeline::front(scene, hw)?;
-    let k = &f.kernel;
+    let k = &crate::stage::accumulate::kernel(hw);
     let w_min = k.w.iter().copied().filter(|&w| w > 0).min().unwrap_or(1);
     Ok(LogAdder::new(log_code(scene, hw)?, &hw.coding, k.f, w_min))
 }

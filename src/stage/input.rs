@@ -5,11 +5,16 @@
 //! Line widths and light-point sizes are quantised to the coordinate grid too.
 //! The float reference of this stage is the host's value itself.
 
-use super::{Cost, LocalError, StageReport, Unit};
+use super::raster::{FPrim, FVertex};
+use super::taps::{Prims, PrimsF, Taps, processing_order};
+use super::{
+    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, TokenKind, Tokens, Unit,
+};
 use crate::config::HwConfig;
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, SignalStats};
-use crate::scene::{HostScene, Primitive, ScreenVertex};
+use crate::scene::{HostScene, Primitive, Scene, ScreenVertex};
+use std::sync::Arc;
 
 /// A quantised vertex: raw codes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,8 +126,21 @@ pub fn overflow_error(signal: &str, q: &Quantizer, exact_lsb: f64) -> Error {
     }
 }
 
+/// The fixed model's output besides the primitives: instrumentation and the stage-local
+/// error (each code against the exact value it quantises, in its LSBs).
+pub struct Quantized {
+    /// Primitives in scene order.
+    pub prims: Vec<QPrim>,
+    /// `input.x`, `input.y`, `input.z`, `input.intensity`.
+    pub signals: Vec<SignalStats>,
+    /// Codes against exact values.
+    pub local: LocalError,
+    /// Vertices quantised.
+    pub vertices: u64,
+}
+
 /// Fixed model: quantises every primitive of the host scene.
-pub fn quantize(host: &HostScene, hw: &HwConfig, report: &mut StageReport) -> Result<Vec<QPrim>> {
+pub fn quantize(host: &HostScene, hw: &HwConfig) -> Result<Quantized> {
     let mut qs = Quantizers {
         hw,
         x: SignalStats::new("input.x", hw.input.coord.format),
@@ -134,40 +152,240 @@ pub fn quantize(host: &HostScene, hw: &HwConfig, report: &mut StageReport) -> Re
     let mut out = Vec::with_capacity(host.prims.len());
     let mut vertices = 0u64;
     for p in &host.prims {
+        vertices += vertices_of(p) as u64;
         out.push(match p {
             Primitive::Triangle(v) => {
-                vertices += 3;
                 QPrim::Triangle([qs.vertex(&v[0])?, qs.vertex(&v[1])?, qs.vertex(&v[2])?])
             }
-            Primitive::Line { a, b, width } => {
-                vertices += 2;
-                QPrim::Line {
-                    a: qs.vertex(a)?,
-                    b: qs.vertex(b)?,
-                    width: qs.length(*width),
-                }
-            }
-            Primitive::Point { v, size } => {
-                vertices += 1;
-                QPrim::Point {
-                    v: qs.vertex(v)?,
-                    size: qs.length(*size),
-                }
-            }
+            Primitive::Line { a, b, width } => QPrim::Line {
+                a: qs.vertex(a)?,
+                b: qs.vertex(b)?,
+                width: qs.length(*width),
+            },
+            Primitive::Point { v, size } => QPrim::Point {
+                v: qs.vertex(v)?,
+                size: qs.length(*size),
+            },
         });
     }
-    report.work.insert("vertices".into(), vertices);
-    report.work.insert("primitives".into(), out.len() as u64);
-    report.local = Some(std::mem::take(&mut qs.local).finish());
-    let w = |q: &Quantizer| q.format.total_bits();
-    report.cost = Cost {
-        adders: vec![
-            Unit::adder("x/y rounder", 2, w(&hw.input.coord)),
-            Unit::adder("z rounder", 1, w(&hw.input.z)),
-            Unit::adder("intensity rounder", 1, w(&hw.input.intensity)),
-        ],
-        ..Cost::default()
+    Ok(Quantized {
+        prims: out,
+        local: std::mem::take(&mut qs.local).finish(),
+        signals: vec![qs.x, qs.y, qs.z, qs.i],
+        vertices,
+    })
+}
+
+/// Vertices of a primitive (3 triangle, 2 line, 1 light point).
+pub fn vertices_of(p: &Primitive) -> u32 {
+    match p {
+        Primitive::Triangle(_) => 3,
+        Primitive::Line { .. } => 2,
+        Primitive::Point { .. } => 1,
+    }
+}
+
+/// Full white in intensity-format integer codes.
+fn white_i(hw: &HwConfig) -> f64 {
+    ((1u64 << hw.input.intensity.format.int_bits) - 1) as f64
+}
+
+/// The background's intensity code (quantised like a vertex intensity).
+pub fn background_code(host: &HostScene, hw: &HwConfig) -> u32 {
+    let q = hw.input.intensity;
+    let white = white_i(hw) * (1u64 << q.format.frac_bits) as f64;
+    q.quantize_f64(host.background * white * q.format.lsb())
+        .code as u32
+}
+
+/// Float reference: the host primitive in the fixed formats' units (no rounding).
+pub fn fprim(p: &Primitive, hw: &HwConfig) -> FPrim {
+    let i_fmt = hw.input.intensity.format;
+    let white = white_i(hw) * (1u64 << i_fmt.frac_bits) as f64;
+    let z_scale = (1u64 << hw.input.z.format.frac_bits) as f64;
+    let v = |v: &ScreenVertex| FVertex {
+        x: v.x,
+        y: v.y,
+        z: v.z * z_scale,
+        i: v.i * white,
     };
-    report.signals = vec![qs.x, qs.y, qs.z, qs.i];
-    Ok(out)
+    match p {
+        Primitive::Triangle(t) => FPrim::Triangle([v(&t[0]), v(&t[1]), v(&t[2])]),
+        Primitive::Line { a, b, width } => FPrim::Line {
+            a: v(a),
+            b: v(b),
+            width: *width,
+        },
+        Primitive::Point { v: c, size } => FPrim::Point {
+            v: v(c),
+            size: *size,
+        },
+    }
+}
+
+/// Where a host primitive can touch the screen, from its coordinates quantised with
+/// `input.coord` (exactly as the fixed model quantises them): the plan's region and tile
+/// bins come from it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Footprint {
+    /// Pixel box `[x0, y0, x1, y1)` (not clamped to the screen): the coordinates' bounding
+    /// box widened by the line width or point size and by the filter apron.
+    pub pixels: [i64; 4],
+    /// A triangle's quantised vertices (coordinate units), for an exact overlap test.
+    pub triangle: Option<[(i64, i64); 3]>,
+}
+
+/// The [`Footprint`] of a host primitive with a filter reaching `apron` pixels beyond a
+/// sample.
+pub fn footprint(p: &Primitive, hw: &HwConfig, apron: i64) -> Footprint {
+    let c = &hw.input.coord;
+    let s = c.format.frac_bits;
+    let q = |v: &ScreenVertex| (c.quantize_f64(v.x).code, c.quantize_f64(v.y).code);
+    let unit = (1u64 << s) as f64;
+    let len = |px: f64| ((px * unit).round()).max(1.0) as i64;
+    let mut b = [i64::MAX, i64::MAX, i64::MIN, i64::MIN];
+    let mut add = |(x, y): (i64, i64), r: i64| {
+        b = [
+            b[0].min(x - r),
+            b[1].min(y - r),
+            b[2].max(x + r),
+            b[3].max(y + r),
+        ];
+    };
+    let mut triangle = None;
+    match p {
+        Primitive::Triangle(v) => {
+            let t = [q(&v[0]), q(&v[1]), q(&v[2])];
+            t.iter().for_each(|&v| add(v, 0));
+            triangle = Some(t);
+        }
+        Primitive::Line { a, b: e, width } => {
+            add(q(a), len(*width));
+            add(q(e), len(*width));
+        }
+        Primitive::Point { v, size } => add(q(v), len(*size)),
+    }
+    Footprint {
+        pixels: [
+            (b[0] >> s) - apron,
+            (b[1] >> s) - apron,
+            (b[2] >> s) + 1 + apron,
+            (b[3] >> s) + 1 + apron,
+        ],
+        triangle,
+    }
+}
+
+/// Whether the closed triangle `t` meets the closed rectangle `r = [x0, y0, x1, y1]`
+/// (separating axes: the rectangle's two and the triangle's three edge normals).
+pub fn triangle_meets(t: &[(i64, i64); 3], r: [i64; 4]) -> bool {
+    let corners = [(r[0], r[1]), (r[2], r[1]), (r[0], r[3]), (r[2], r[3])];
+    let span = |pts: &mut dyn Iterator<Item = i128>| {
+        pts.fold((i128::MAX, i128::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    };
+    let mut axes = vec![(1i128, 0i128), (0, 1)];
+    for k in 0..3 {
+        let (a, b) = (t[k], t[(k + 1) % 3]);
+        axes.push((-((b.1 - a.1) as i128), (b.0 - a.0) as i128));
+    }
+    axes.into_iter().all(|(nx, ny)| {
+        let dot = |(x, y): (i64, i64)| nx * x as i128 + ny * y as i128;
+        let (tl, th) = span(&mut t.iter().map(|&v| dot(v)));
+        let (rl, rh) = span(&mut corners.iter().map(|&v| dot(v)));
+        th >= rl && rh >= tl
+    })
+}
+
+/// The input stage.
+pub struct Input;
+
+impl Stage for Input {
+    type Fixed = (LocalError, Vec<u64>);
+
+    fn id(&self) -> StageId {
+        StageId::Input
+    }
+
+    fn plan(&self, _scene: &Scene, hw: &HwConfig) -> Result<Need> {
+        let i = &hw.input;
+        Ok(Need::yes(format!(
+            "the first modelled stage: vertices to x, y {}, z {}, intensity {}",
+            i.coord.format, i.z.format, i.intensity.format
+        )))
+    }
+
+    fn key(&self, cx: &Cx) -> serde_json::Value {
+        serde_json::json!({"input": cx.hw.section("input"), "guard_band": cx.hw.raster.guard_band})
+    }
+
+    fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(Self::Fixed, Facts)> {
+        let host = taps.host();
+        let q = quantize(host, cx.hw)?;
+        let bg = background_code(host, cx.hw);
+        let order = processing_order(
+            |i| matches!(host.prims[i], Primitive::Point { .. }),
+            host.prims.len(),
+        );
+        let tokens = order
+            .iter()
+            .map(|&i| vertices_of(&host.prims[i]) as u64)
+            .collect();
+        let facts = Facts {
+            work: vec![
+                ("vertices", q.vertices),
+                ("primitives", q.prims.len() as u64),
+            ],
+            signals: q.signals,
+            ..Facts::default()
+        };
+        taps.fixed.prims = Some(Arc::new(Prims { q: q.prims, bg }));
+        Ok(((q.local, tokens), facts))
+    }
+
+    fn float(&self, cx: &Cx, _: &Self::Fixed, taps: &mut Taps, _: &mut Notes) -> Result<()> {
+        let host = taps.host();
+        let f = host.prims.iter().map(|p| fprim(p, cx.hw)).collect();
+        let i_fmt = cx.hw.input.intensity.format;
+        let bg = host.background * white_i(cx.hw) * (1u64 << i_fmt.frac_bits) as f64;
+        taps.float.prims = Some(Arc::new(PrimsF { f, bg }));
+        Ok(())
+    }
+
+    fn local(
+        &self,
+        _: &Cx,
+        fixed: &Self::Fixed,
+        _: &Taps,
+        _: &Taps,
+        _: &mut Notes,
+    ) -> Option<LocalError> {
+        Some(fixed.0.clone())
+    }
+
+    fn tokens(&self, _: &Cx, fixed: &Self::Fixed) -> Option<Tokens> {
+        Some(Tokens {
+            kind: TokenKind::Primitive,
+            item: "vertices",
+            items: fixed.1.clone(),
+            port_bits: vec![],
+        })
+    }
+
+    fn cost(&self, cx: &Cx, _: &Self::Fixed) -> Cost {
+        let hw = cx.hw;
+        let w = |q: &Quantizer| q.format.total_bits();
+        Cost::new(
+            vec![],
+            vec![
+                Unit::adder("x/y rounder", 2, w(&hw.input.coord)),
+                Unit::adder("z rounder", 1, w(&hw.input.z)),
+                Unit::adder("intensity rounder", 1, w(&hw.input.intensity)),
+            ],
+            vec![],
+        )
+    }
+
+    fn memories(&self, _: &Cx, _: &Self::Fixed, _: &Taps) -> Vec<MemImage> {
+        vec![]
+    }
 }

@@ -13,8 +13,16 @@
 //! * Attributes are planes; the interpolator steps by gradients with
 //!   `interp_guard_bits` extra fraction bits.
 
-use super::Grid;
 use super::input::{QPrim, QVertex};
+use super::taps::Taps;
+use super::{
+    Cost, Cx, Facts, Grid, LocalError, MemImage, Need, Notes, Stage, StageId, TokenKind, Tokens,
+    Unit,
+};
+use crate::config::HwConfig;
+use crate::error::Result;
+use crate::scene::Scene;
+use std::sync::Arc;
 
 /// Floor division of integers.
 #[inline]
@@ -330,6 +338,84 @@ pub fn setup(p: &QPrim, g: &Grid, work: &mut SetupWork) -> Setup {
                 i: v.i,
             })
         }
+    }
+}
+
+/// The setup stage.
+pub struct SetupStage;
+
+impl Stage for SetupStage {
+    type Fixed = usize;
+
+    fn id(&self) -> StageId {
+        StageId::Setup
+    }
+
+    fn plan(&self, _: &Scene, _: &HwConfig) -> Result<Need> {
+        Ok(Need::yes(
+            "every primitive needs edge and plane constants (the geometry path's only divides)",
+        ))
+    }
+
+    fn key(&self, cx: &Cx) -> serde_json::Value {
+        serde_json::json!({"grid": cx.layout.grid})
+    }
+
+    fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(usize, Facts)> {
+        let mut w = SetupWork::default();
+        let prims = &taps.fixed.prims().q;
+        let setups: Vec<Setup> = prims
+            .iter()
+            .map(|p| setup(p, &cx.layout.grid, &mut w))
+            .collect();
+        let n = setups.len();
+        taps.fixed.setups = Some(Arc::new(setups));
+        let facts = Facts {
+            work: vec![
+                ("triangles", w.triangles),
+                ("degenerate", w.degenerate),
+                ("lines", w.lines),
+                ("points", w.points),
+            ],
+            ..Facts::default()
+        };
+        Ok((n, facts))
+    }
+
+    fn float(&self, _: &Cx, _: &usize, _: &mut Taps, _: &mut Notes) -> Result<()> {
+        // The float raster works from the primitives directly: no float setup.
+        Ok(())
+    }
+
+    fn local(&self, _: &Cx, _: &usize, _: &Taps, _: &Taps, _: &mut Notes) -> Option<LocalError> {
+        None
+    }
+
+    fn tokens(&self, _: &Cx, n: &usize) -> Option<Tokens> {
+        Some(Tokens {
+            kind: TokenKind::Primitive,
+            item: "primitives",
+            items: vec![1; *n],
+            port_bits: vec![],
+        })
+    }
+
+    fn cost(&self, cx: &Cx, _: &usize) -> Cost {
+        let cb = cx.hw.input.coord.format.total_bits();
+        let ib = cx.hw.input.intensity.format.total_bits();
+        Cost::new(
+            vec![],
+            vec![],
+            vec![
+                Unit::mul("edge start (x * dy)", 1, cb + 1, cb + 1),
+                Unit::mul("edge step quotient (dx / dy)", 1, cb + 1, cb + 1),
+                Unit::mul("plane gradient (divide)", 2, 2 * cb + ib, 2 * cb + 2),
+            ],
+        )
+    }
+
+    fn memories(&self, _: &Cx, _: &usize, _: &Taps) -> Vec<MemImage> {
+        vec![]
     }
 }
 

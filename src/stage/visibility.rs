@@ -5,8 +5,19 @@
 //! Light points are tested against the finished surface buffer and never write: they are
 //! added to the frame by the accumulate stage, as light points are in image generators.
 
-use super::raster::{Frag, FragF, SampleRegion};
-use crate::fixed::{Quant, round_shift_i64};
+use super::accumulate::PointFrags;
+use super::input::QPrim;
+use super::raster::{Frag, FragF};
+use super::taps::{SampleCoding, SampleTap, SampleTapF, Taps, processing_order};
+use super::{
+    Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, SampleRegion, Stage, StageId,
+    TokenKind, Tokens, Unit,
+};
+use crate::config::HwConfig;
+use crate::error::Result;
+use crate::fixed::{Quant, SignalStats, round_shift_i64};
+use crate::scene::Scene;
+use std::sync::Arc;
 
 /// Primitive id of the background (samples no surface covered).
 pub const BACKGROUND: u32 = 0;
@@ -151,4 +162,237 @@ pub fn point_visible_f64(frags: &[FragF], buf: &SamplesF) -> Vec<(u32, f64)> {
         .filter(|f| f.z < buf.z[f.s as usize])
         .map(|f| (f.s, f.i))
         .collect()
+}
+
+/// The z-buffer conversion of the hardware configuration.
+pub fn z_convert(hw: &HwConfig) -> ZConvert {
+    ZConvert {
+        shift: hw.input.z.format.frac_bits - hw.visibility.z.format.frac_bits,
+        quant: hw.visibility.z.quant,
+        max: hw.visibility.z.format.max_code() as u32,
+    }
+}
+
+/// Bits of a sample's primitive id for `prims` primitives (id 0 is the background).
+pub fn id_bits(prims: usize) -> u32 {
+    (prims as u64 + 1)
+        .next_power_of_two()
+        .trailing_zeros()
+        .max(1)
+}
+
+/// The sample buffer's memory: one word per sample of the screen, holding the depth code,
+/// the stored intensity code (`intensity_bits`: the log code's width under log coding) and
+/// the primitive id.
+pub fn sample_buffer(cx: &Cx, prims: usize, intensity_bits: u32) -> Memory {
+    let zb = cx.hw.visibility.z.format.total_bits();
+    Memory::ram(
+        SAMPLE_BUFFER,
+        cx.layout.grid.samples(),
+        zb + intensity_bits + id_bits(prims),
+    )
+}
+
+/// Name of the sample buffer memory.
+pub const SAMPLE_BUFFER: &str = "sample buffer";
+
+/// The sample buffer's modelled region as a memory image (depth, intensity, id). An empty
+/// sample ("nothing", `u32::MAX` in the model) is stored as the far code (all ones) with the
+/// background id.
+pub fn sample_image(cx: &Cx, s: Arc<SampleTap>, prims: usize, intensity_bits: u32) -> MemImage {
+    let zb = cx.hw.visibility.z.format.total_bits();
+    let zmax = cx.hw.visibility.z.format.max_code() as u64;
+    MemImage {
+        name: SAMPLE_BUFFER.into(),
+        fields: vec![zb, intensity_bits, id_bits(prims)],
+        words: s.samples.z.len(),
+        region_only: true,
+        get: Arc::new(move |r, k| match k {
+            0 => (s.samples.z[r] as u64).min(zmax),
+            1 => s.samples.i[r] as u64,
+            _ => s.samples.prim[r] as u64,
+        }),
+    }
+}
+
+/// The visibility stage.
+pub struct Visibility;
+
+impl Stage for Visibility {
+    /// Depth tests per primitive (processing order).
+    type Fixed = Vec<u64>;
+
+    fn id(&self) -> StageId {
+        StageId::Visibility
+    }
+
+    fn plan(&self, _: &Scene, hw: &HwConfig) -> Result<Need> {
+        Ok(Need::yes(format!(
+            "surfaces are depth-tested per sample in a {} z-buffer",
+            hw.visibility.z.format
+        )))
+    }
+
+    fn key(&self, cx: &Cx) -> serde_json::Value {
+        serde_json::json!({
+            "visibility": cx.hw.section("visibility"),
+            // The sample buffer's cost moves to logdomain when the samples are log coded.
+            "log_coded": cx.layout.has(StageId::Logdomain),
+        })
+    }
+
+    fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(Vec<u64>, Facts)> {
+        let zc = z_convert(cx.hw);
+        let prims = taps.fixed.prims();
+        let frags = taps.fixed.frags();
+        let mut w = VisWork::default();
+        let mut buf = Samples::new(cx.layout.samples, prims.bg);
+        let n = prims.q.len();
+        let mut tests = vec![0u64; n];
+        for (p, q) in prims.q.iter().enumerate() {
+            if matches!(q, QPrim::Point { .. }) {
+                continue;
+            }
+            let before = w.tests;
+            resolve(frags.of(p), p as u32 + 1, &zc, &mut buf, &mut w);
+            tests[p] = w.tests - before;
+        }
+        let i_max = cx.hw.input.intensity.format.max_code();
+        let mut points = Vec::new();
+        for (p, q) in prims.q.iter().enumerate() {
+            let QPrim::Point { v, .. } = q else { continue };
+            let before = w.point_tests;
+            let vis = point_visible(frags.of(p), &zc, &buf, &mut w);
+            tests[p] = w.point_tests - before;
+            points.push(PointFrags {
+                i: v.i.clamp(0, i_max) as u32,
+                samples: vis,
+            });
+        }
+        let order = processing_order(|i| matches!(prims.q[i], QPrim::Point { .. }), n);
+        let tokens = order.iter().map(|&i| tests[i]).collect();
+        let mut zst = SignalStats::new("visibility.z", cx.hw.visibility.z.format);
+        zst.add_overflows(w.clamped);
+        let mut facts = Facts {
+            work: vec![
+                ("tests", w.tests),
+                ("writes", w.writes),
+                ("point_tests", w.point_tests),
+                ("point_visible", w.point_visible),
+            ],
+            signals: vec![zst],
+            ..Facts::default()
+        };
+        facts.note("samples_in_region", cx.layout.samples.len() as u64);
+        let bg = prims.bg;
+        taps.fixed.samples = Some(Arc::new(SampleTap {
+            samples: buf,
+            points,
+            bg,
+            coding: SampleCoding::Linear,
+        }));
+        Ok((tokens, facts))
+    }
+
+    fn float(&self, cx: &Cx, _: &Vec<u64>, taps: &mut Taps, _: &mut Notes) -> Result<()> {
+        let prims = taps.float.prims();
+        let frags = taps.float.frags();
+        let mut buf = SamplesF::new(cx.layout.samples, prims.bg);
+        for (p, f) in prims.f.iter().enumerate() {
+            if !f.is_point() {
+                resolve_f64(frags.of(p), p as u32 + 1, &mut buf);
+            }
+        }
+        let mut points = Vec::new();
+        for (p, f) in prims.f.iter().enumerate() {
+            let super::raster::FPrim::Point { v, .. } = f else {
+                continue;
+            };
+            let vis = point_visible_f64(frags.of(p), &buf);
+            points.push(PointFrags {
+                i: v.i,
+                samples: vis.into_iter().map(|v| v.0).collect(),
+            });
+        }
+        let bg = prims.bg;
+        taps.float.samples = Some(Arc::new(SampleTapF {
+            samples: buf,
+            points,
+            bg,
+        }));
+        Ok(())
+    }
+
+    /// A float z-buffer fed the fixed raster's fragments (in sample order per primitive):
+    /// samples won by a different primitive are mismatched items.
+    fn local(
+        &self,
+        _: &Cx,
+        _: &Vec<u64>,
+        _: &Taps,
+        out: &Taps,
+        _: &mut Notes,
+    ) -> Option<LocalError> {
+        let prims = out.fixed.prims();
+        let frags = out.fixed.frags();
+        let fixed = &out.fixed.samples().samples;
+        let mut shadow = SamplesF::new(fixed.reg, prims.bg as f64);
+        let mut exact: Vec<FragF> = Vec::new();
+        for (p, q) in prims.q.iter().enumerate() {
+            if matches!(q, QPrim::Point { .. }) {
+                continue;
+            }
+            exact.clear();
+            exact.extend(frags.of(p).iter().map(|x| FragF {
+                s: x.s,
+                z: x.z as f64,
+                i: x.i as f64,
+            }));
+            exact.sort_by_key(|x| x.s);
+            resolve_f64(&exact, p as u32 + 1, &mut shadow);
+        }
+        let mut e = LocalError::default();
+        for (a, b) in fixed.prim.iter().zip(&shadow.prim) {
+            e.values += 1;
+            if a == b {
+                e.identical += 1;
+            } else {
+                e.mismatched_items += 1;
+            }
+        }
+        Some(e)
+    }
+
+    fn tokens(&self, _: &Cx, tests: &Vec<u64>) -> Option<Tokens> {
+        Some(Tokens {
+            kind: TokenKind::Primitive,
+            item: "depth tests",
+            items: tests.clone(),
+            port_bits: vec![],
+        })
+    }
+
+    fn cost(&self, cx: &Cx, tests: &Vec<u64>) -> Cost {
+        let zb = cx.hw.visibility.z.format.total_bits();
+        let memories = if cx.layout.has(StageId::Logdomain) {
+            vec![]
+        } else {
+            let ib = cx.hw.input.intensity.format.total_bits();
+            vec![sample_buffer(cx, tests.len(), ib)]
+        };
+        Cost::new(memories, vec![Unit::adder("depth compare", 1, zb)], vec![])
+    }
+
+    fn memories(&self, cx: &Cx, tests: &Vec<u64>, out: &Taps) -> Vec<MemImage> {
+        if cx.layout.has(StageId::Logdomain) {
+            return vec![];
+        }
+        let ib = cx.hw.input.intensity.format.total_bits();
+        let s = out
+            .fixed
+            .samples
+            .clone()
+            .expect("visibility wrote the samples");
+        vec![sample_image(cx, s, tests.len(), ib)]
+    }
 }

@@ -72,17 +72,6 @@ fn flatten(
     Ok(())
 }
 
-/// Stable 64-bit FNV-1a hash (documented constants: offset 0xcbf29ce484222325, prime 0x100000001b3);
-/// unlike `std`'s `DefaultHasher` it is the same on every build and platform.
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
 /// Largest number of configurations a grid may expand to.
 pub const MAX_CONFIGS: usize = 100_000;
 

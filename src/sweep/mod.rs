@@ -11,15 +11,14 @@
 //! * `--shard K/N` runs a contiguous block of jobs: shard files concatenated in K order equal
 //!   the unsharded output.
 
-pub mod cache;
 pub mod grid;
 pub mod pareto;
 pub mod plot;
-pub mod ranges;
 
 use crate::error::{Error, Result};
-use crate::pipeline::{self, RenderOptions};
+use crate::pipeline::{self, Cache};
 use crate::scene::Scene;
+use crate::stage::RunOptions;
 use grid::{Config, Shard};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
@@ -95,8 +94,8 @@ pub struct FlickerMetrics {
 impl FlickerMetrics {
     /// Runs the flicker sweep of `hw`.
     pub fn of(hw: &crate::config::HwConfig, phases: u32) -> Result<FlickerMetrics> {
-        let r = crate::flicker::flicker(hw, phases)?;
-        let max = |f: fn(&crate::flicker::ObjectFlicker) -> f64| {
+        let r = crate::analysis::flicker::flicker(hw, phases)?;
+        let max = |f: fn(&crate::analysis::flicker::ObjectFlicker) -> f64| {
             r.objects.iter().map(f).fold(0.0, f64::max)
         };
         let worst = r
@@ -141,6 +140,10 @@ pub struct Row {
     /// Small-object flicker (only with `--flicker`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flicker: Option<FlickerMetrics>,
+    /// Stages whose result was reused from an earlier row of the run (run state, like the
+    /// timing: excluded when rows are compared).
+    #[serde(default)]
+    pub reused: Vec<String>,
     /// Wall time (excluded when rows are compared).
     pub timing: RowTiming,
 }
@@ -161,7 +164,7 @@ pub fn row_id(scene: &str, canonical: &str) -> String {
     let mut key = scene.as_bytes().to_vec();
     key.push(b'\n');
     key.extend_from_slice(canonical.as_bytes());
-    format!("{:016x}", grid::fnv1a(&key))
+    format!("{:016x}", crate::fnv::fnv1a(&key))
 }
 
 /// All jobs of a sweep in order.
@@ -181,17 +184,11 @@ pub fn run_job(
     job: Job,
     cfg: &Config,
     scene: &Scene,
-    cache: Option<&cache::PhaseCache>,
+    cache: Option<&Cache>,
     flicker: Option<u32>,
 ) -> Result<Row> {
     let t = std::time::Instant::now();
-    let r = pipeline::render_cached(
-        scene,
-        &cfg.hw,
-        RenderOptions { stage_local: false },
-        false,
-        cache,
-    )?;
+    let r = pipeline::render_with(scene, &cfg.hw, RunOptions::FAST, cache)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     let rep = &r.report;
     let c = &rep.end_to_end.codes;
@@ -245,6 +242,7 @@ pub fn run_job(
         flicker: flicker
             .map(|n| FlickerMetrics::of(&cfg.hw, n))
             .transpose()?,
+        reused: rep.reused.clone(),
         timing: RowTiming { render_ms },
     })
 }
@@ -309,7 +307,7 @@ pub struct SweepOptions<'a> {
     /// Worker threads over configurations (1 = serial).
     pub jobs: usize,
     /// Stage reuse between configurations (`None`: every render runs every phase).
-    pub cache: Option<&'a cache::PhaseCache>,
+    pub cache: Option<&'a Cache>,
     /// Add the small-object flicker metrics at this many sub-pixel phases per axis.
     pub flicker: Option<u32>,
 }
@@ -419,11 +417,12 @@ pub fn run(
     })
 }
 
-/// A row as JSON without its timing (for comparing runs).
+/// A row as JSON without its run state (timing, reused stages), for comparing runs.
 pub fn without_timing(r: &Row) -> serde_json::Value {
     let mut v = serde_json::to_value(r).expect("rows serialise");
     if let Some(o) = v.as_object_mut() {
         o.remove("timing");
+        o.remove("reused");
     }
     v
 }

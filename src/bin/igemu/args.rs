@@ -4,13 +4,14 @@
 
 use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
+use igemu::analysis::ranges::Export;
 use igemu::config::{FilterKind, HwConfig};
 use igemu::error::{Error, FileError};
 use igemu::hdl::verilator::Sim;
-use igemu::pipeline::{self, Render, RenderOptions};
+use igemu::pipeline::{self, Render};
 use igemu::scene::Scene;
+use igemu::stage::RunOptions;
 use igemu::stage_id::StageId;
-use igemu::sweep::ranges::Export;
 use std::sync::LazyLock;
 
 #[derive(Args)]
@@ -34,7 +35,7 @@ impl SceneArgs {
     }
 
     /// Renders the scene on the hardware.
-    pub fn render(&self, opts: RenderOptions) -> Result<Render, Error> {
+    pub fn render(&self, opts: RunOptions) -> Result<Render, Error> {
         let scene = self.scene()?;
         let hw = self.hw()?;
         pipeline::render(&scene, &hw, opts)
@@ -142,4 +143,61 @@ impl From<FilterArg> for FilterKind {
             FilterArg::Gaussian => FilterKind::Gaussian,
         }
     }
+}
+
+/// A pixel tap to dump (`render --dump TAP=PATH`): `STAGE` or `STAGE.PLANE` for the stages
+/// whose taps are images ([`igemu::stage::taps::image_planes`]): the frame memory after
+/// accumulate and dof (planes `frame`, `depth`, `coverage`; `frame` by default), the codes
+/// after gamma and dither.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DumpTap {
+    /// The stage whose output taps are dumped.
+    pub stage: StageId,
+    /// The plane.
+    pub plane: &'static str,
+}
+
+impl ValueEnum for DumpTap {
+    fn value_variants<'a>() -> &'a [Self] {
+        static TAPS: LazyLock<Vec<DumpTap>> = LazyLock::new(|| {
+            StageId::ALL
+                .into_iter()
+                .flat_map(|stage| {
+                    igemu::stage::taps::image_planes(stage)
+                        .iter()
+                        .map(move |&plane| DumpTap { stage, plane })
+                })
+                .collect()
+        });
+        &TAPS
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        let first = igemu::stage::taps::image_planes(self.stage).first() == Some(&self.plane);
+        let name = format!("{}.{}", self.stage, self.plane);
+        let v = PossibleValue::new(name.clone());
+        // `STAGE` alone names its first plane.
+        Some(if first { v.alias(self.stage.name()) } else { v })
+    }
+}
+
+/// Parses `TAP=PATH` for `--dump`.
+pub fn parse_dump(s: &str) -> Result<(DumpTap, String), String> {
+    let (tap, path) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}` is not TAP=PATH"))?;
+    let t = DumpTap::from_str(tap, false).map_err(|_| {
+        let all: Vec<String> = DumpTap::value_variants()
+            .iter()
+            .map(|t| format!("{}.{}", t.stage, t.plane))
+            .collect();
+        format!(
+            "unknown tap `{tap}`; allowed: {} (a stage alone names its first plane)",
+            all.join(", ")
+        )
+    })?;
+    if path.is_empty() {
+        return Err(format!("`{s}` names no PATH"));
+    }
+    Ok((t, path.to_string()))
 }

@@ -1,9 +1,9 @@
 //! The text reports of the commands: the render report, the cycle report, the width
 //! validation table, and the work-count list they share.
 
+use igemu::analysis::widths::RampCheck;
 use igemu::cycles::CycleReport;
 use igemu::pipeline::Report;
-use igemu::stage::logdomain::RampCheck;
 use std::collections::BTreeMap;
 
 /// Prints the cycle report (plan, per-stage table, frame rate, cost, simulator speed).
@@ -102,13 +102,9 @@ pub fn print_cycles(c: &CycleReport) {
     let packed: Vec<String> = k
         .packed
         .iter()
-        .map(|p| {
-            format!(
-                "{} {} bits {}",
-                p.name,
-                p.bits,
-                if p.verified { "ok" } else { "MISMATCH" }
-            )
+        .map(|p| match &p.problem {
+            None => format!("{} {} bits ok", p.name, p.bits),
+            Some(why) => format!("{} MISMATCH ({why})", p.name),
         })
         .collect();
     println!("packed with bitvec and read back: {}", packed.join(", "));
@@ -124,7 +120,7 @@ pub fn print_cycles(c: &CycleReport) {
 pub fn print_width_checks(checks: &[RampCheck], weber: f64) {
     println!(
         "validation by emulation: a {}-sample ramp over the full contrast, quantised and through the gamma LUT;",
-        igemu::stage::logdomain::RAMP_SAMPLES
+        igemu::analysis::widths::RAMP_SAMPLES
     );
     println!("  contours = adjacent output steps with a luminance ratio above 1 + {weber}");
     println!(
@@ -176,17 +172,31 @@ pub fn print_report(r: &Report, out: &str) {
         r.timing.threads
     );
     println!(
-        "plan: {} | region x {}..{} y {}..{} ({:.1}% of the screen) | {}x{} samples/pixel | gamma {}",
+        "plan: {} | region x {}..{} y {}..{} ({:.1}% of the screen) | tiles {}x{} px: {} binned | {}x{} samples/pixel | gamma {}",
         p.stages.join(" -> "),
         p.region.x0,
         p.region.x1,
         p.region.y0,
         p.region.y1,
         100.0 * p.region_fraction,
+        p.tiles.size,
+        p.tiles.size,
+        p.tiles.binned,
         p.samples,
         p.samples,
         p.gamma
     );
+    for d in &p.decisions {
+        println!(
+            "  {:<11} {:<3}  {}",
+            d.stage.name(),
+            if d.need.planned { "in" } else { "out" },
+            d.need.reason
+        );
+    }
+    if !r.reused.is_empty() {
+        println!("reused from the cache: {}", r.reused.join(", "));
+    }
     println!();
     println!(
         "{:<11} {:>9} {:>9}  {:>10} {:>10} {:>9}  work",

@@ -12,6 +12,7 @@ use crate::pipeline;
 use crate::scene::Scene;
 use crate::stage::accumulate::AccParams;
 use crate::stage::input::QPrim;
+use crate::stage::{RunOptions, StageId};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -19,10 +20,12 @@ use std::time::Instant;
 pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
     let frame = hw.accumulate.frame;
     let acc_bits = frame.format.total_bits();
-    let f = pipeline::front(scene, hw)?;
+    let (_, input) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Input)?;
+    let kernel = crate::stage::accumulate::kernel(hw);
+    let bg = input.fixed.prims().bg;
     let i_fmt = hw.input.intensity.format;
     let ap = AccParams {
-        kernel: f.kernel.clone(),
+        kernel: kernel.clone(),
         i_frac: i_fmt.frac_bits,
         frame,
     };
@@ -37,15 +40,8 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
         Overflow::SatZero => 2,
         _ => 1,
     };
-    let wb = 32
-        - f.kernel
-            .w
-            .iter()
-            .max()
-            .copied()
-            .unwrap_or(1)
-            .leading_zeros();
-    let wb = wb.max(f.kernel.f + 1);
+    let wb = 32 - kernel.w.iter().max().copied().unwrap_or(1).leading_zeros();
+    let wb = wb.max(kernel.f + 1);
     let ib = i_fmt.total_bits();
     b.params = vec![
         ("W_BITS".into(), wb as i64),
@@ -63,9 +59,11 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     // Scene taps: the kernel's weights, the scene's vertex intensity codes and
     // the rendered frame codes as the running sum.
     let taps = frame_taps(scene, hw, TAPS)?;
-    let ws: Vec<u32> = f.kernel.w.clone();
-    let is: Vec<u32> = f
-        .qprims
+    let ws: Vec<u32> = kernel.w.clone();
+    let is: Vec<u32> = input
+        .fixed
+        .prims()
+        .q
         .iter()
         .flat_map(|p| match p {
             QPrim::Triangle(v) => vec![v[0].i, v[1].i, v[2].i],
@@ -73,7 +71,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
             QPrim::Point { v, .. } => vec![v.i],
         })
         .map(|i| i.max(0) as u32)
-        .chain(std::iter::once(f.bg.0))
+        .chain(std::iter::once(bg))
         .collect();
     for (k, t) in taps.iter().enumerate() {
         let w = ws[k % ws.len()];
@@ -86,7 +84,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     let imax = (1u64 << ib) - 1;
     let amax = (1u64 << acc_bits) - 1;
     let mut edge = 0;
-    for w in [0, 1, 1u64 << f.kernel.f, wmax] {
+    for w in [0, 1, 1u64 << kernel.f, wmax] {
         for i in [0, 1, imax / 2, imax] {
             for a in [0, 1, amax / 2, amax - 1, amax] {
                 b.vectors.push(one(w as u32, i as u32, a as u32));

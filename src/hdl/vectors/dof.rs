@@ -13,11 +13,12 @@ use super::{RANDOM, TAPS, bad};
 use crate::config::HwConfig;
 use crate::error::{Error, FileError, Result};
 use crate::hdl::bench::{Bench, Rng};
-use crate::pipeline::{self, RenderOptions};
+use crate::pipeline;
 use crate::scene::Scene;
 use crate::stage::dof::{
     DepthImage, LayerPlanes, LensMap, border_sum, layered_fixed_observed, plan_layers, row_mac,
 };
+use crate::stage::{RunOptions, StageId};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -49,11 +50,8 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
             ),
         ));
     }
-    let f = pipeline::front(scene, hw)?;
-    let opts = RenderOptions { stage_local: false };
-    let g = pipeline::geometry(&f, hw, opts)?;
-    let acc = pipeline::accumulate_phase(&f, &g, hw, opts)?;
-    let frame = &acc.frame;
+    let (_, taps) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Accumulate)?;
+    let frame = &taps.fixed.frame().frame;
     let (w, h) = (frame.width as usize, frame.height as usize);
     let lens = LensMap::from_camera(&scene.camera, frame.height, z_frac)
         .expect("a thin-lens camera, checked above");

@@ -8,8 +8,9 @@ use super::bench::{Bench, Rng};
 use super::{MODULES, module_of};
 use crate::config::HwConfig;
 use crate::error::{Error, FileError, Result};
-use crate::pipeline::{self, RenderOptions};
+use crate::pipeline;
 use crate::scene::Scene;
+use crate::stage::RunOptions;
 use crate::stage::gamma::GammaSpec;
 use crate::stage_id::StageId;
 
@@ -40,13 +41,13 @@ pub(crate) fn bad(hw: &HwConfig, field: &str, msg: String) -> Error {
 
 /// Up to `max` frame codes from the scene's fixed render, evenly spread over the image.
 fn frame_taps(scene: &Scene, hw: &HwConfig, max: usize) -> Result<Vec<(u32, u32, u32)>> {
-    let r = pipeline::render(scene, hw, RenderOptions { stage_local: false })?;
-    let w = r.frame.width.max(1) as usize;
-    let n = r.frame.acc.len();
+    let r = pipeline::render(scene, hw, RunOptions::FAST)?;
+    let w = r.frame().width.max(1) as usize;
+    let n = r.frame().acc.len();
     let step = n.div_ceil(max).max(1);
     Ok((0..n)
         .step_by(step)
-        .map(|p| ((p % w) as u32, (p / w) as u32, r.frame.acc[p]))
+        .map(|p| ((p % w) as u32, (p / w) as u32, r.frame().acc[p]))
         .collect())
 }
 

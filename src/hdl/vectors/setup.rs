@@ -11,6 +11,7 @@ use crate::pipeline;
 use crate::scene::Scene;
 use crate::stage::input::QPrim;
 use crate::stage::setup::Edge;
+use crate::stage::{RunOptions, StageId};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -18,10 +19,10 @@ use std::time::Instant;
 pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig) -> Result<()> {
     // Real scene edges: every triangle edge of the quantised scene, loaded and
     // walked over all its sample rows.
-    let f = pipeline::front(scene, hw)?;
-    let g = &f.grid;
+    let (plan, taps) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Input)?;
+    let g = &plan.layout.grid;
     let mut edges = vec![];
-    for p in &f.qprims {
+    for p in &taps.fixed.prims().q {
         if let QPrim::Triangle(v) = p {
             let mut s = *v;
             s.sort_by_key(|p| (p.y, p.x));

@@ -189,7 +189,7 @@ pub fn accumulate(
 pub fn accumulate_tiles(
     s: &Samples,
     region: &Region,
-    tiles: Option<&crate::cycles::Tiles>,
+    tiles: Option<&crate::stage::Tiles>,
     points: &[PointFrags<u32>],
     p: &AccParams,
     bg_i: u32,

@@ -17,16 +17,18 @@
 //!
 //! Files: `kernel` (the quantised [`Kernel`]), `fixed` (the fixed model into the frame
 //! memory), `points` (light points and the sample region), `float` (the float reference),
-//! `cost` (the stage's hardware cost).
+//! `cost` (the stage's hardware cost), `stage` (the stage contract).
 
 mod cost;
 mod fixed;
 mod float;
 mod kernel;
 mod points;
+mod stage;
 
-pub use cost::cost;
+pub use cost::{FRAME_MEMORY, WEIGHT_ROM, cost};
 pub use fixed::{AccParams, AccWork, Frame, accumulate, accumulate_tiles, own_depth_coverage};
 pub use float::{AccRef, accumulate_f64};
 pub use kernel::Kernel;
 pub use points::{PointFrags, point_weights, sample_region};
+pub use stage::{Accumulate, kernel};

@@ -41,18 +41,18 @@
 //! Files: `mask` (Bayer and blue-noise masks, temporal offsets), `ordered` (ordered dither,
 //! fixed and float), `diffusion` (Floyd-Steinberg, fixed and float), `unit` (the configured
 //! [`Dither`], its cost, the temporal period-mean check), `luts` (the gamma LUTs of the two
-//! placements), `post` (the gamma + dither post phase of the pipeline).
+//! placements), `stage` (the stage contract).
 
 mod diffusion;
 mod luts;
 mod mask;
 mod ordered;
-mod post;
+mod stage;
 mod unit;
 
 pub use diffusion::{FsParams, floyd_steinberg, floyd_steinberg_f64};
 pub use luts::{extended_lut, reduced_lut};
 pub use mask::Mask;
 pub use ordered::{apply_ordered, apply_ordered_f64, ordered_code, ordered_f64};
-pub use post::{DitheredPost, post};
-pub use unit::{Dither, PeriodMean, period_mean};
+pub use stage::DitherStage;
+pub use unit::{Dither, ERROR_LINE, MASK_ROM, PeriodMean, period_mean};

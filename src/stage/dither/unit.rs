@@ -6,7 +6,13 @@ use super::mask::Mask;
 use super::ordered::{apply_ordered, apply_ordered_f64, ordered_code};
 use crate::config::DitherCfg;
 use crate::fixed::{QFormat, SignalStats};
-use crate::stage::{Cost, Unit};
+use crate::stage::{Cost, MemImage, Memory, Unit};
+use std::sync::Arc;
+
+/// Name of the mask ROM.
+pub const MASK_ROM: &str = "dither mask ROM";
+/// Name of the error-diffusion line buffer.
+pub const ERROR_LINE: &str = "dither error line buffer";
 use serde::Serialize;
 
 /// A configured dither: kind, mask and arithmetic.
@@ -75,6 +81,18 @@ impl Dither {
         if self.cfg.temporal { self.cfg.frame } else { 0 }
     }
 
+    /// The mask ROM's contents (ordered dithers): the ranks, row-major.
+    pub fn images(&self) -> Vec<MemImage> {
+        match &self.mask {
+            Some(m) => vec![MemImage::table(
+                MASK_ROM,
+                m.bits.max(1),
+                Arc::new(m.rank.clone()),
+            )],
+            None => vec![],
+        }
+    }
+
     /// Cost of the dither unit for an image `width` pixels wide with `s` input fraction
     /// bits and `out_bits` output bits.
     pub fn cost(&self, width: u32, s: u32, out_bits: u32) -> Cost {
@@ -88,24 +106,24 @@ impl Dither {
                     adders.push(Unit::adder("frame counter", 1, m.bits));
                     adders.push(Unit::adder("mask offset", 2, m.bits / 2));
                 }
-                Cost {
-                    lut_bits: m.period() as u64 * m.bits as u64,
+                Cost::new(
+                    vec![Memory::rom(MASK_ROM, m.period() as u64, m.bits.max(1))],
                     adders,
-                    ..Cost::default()
-                }
+                    vec![],
+                )
             }
             None => {
                 let eb = self.cfg.error.total_bits();
-                Cost {
-                    storage_bits: (width as u64 + 2) * eb as u64,
-                    adders: vec![
+                Cost::new(
+                    vec![Memory::ram(ERROR_LINE, width as u64 + 2, eb)],
+                    vec![
                         Unit::adder("pixel + error", 1, out_bits + self.cfg.error.frac_bits + 2),
                         Unit::adder("round and saturate", 1, out_bits + 1),
                         Unit::adder("3r, 5r, 7r (shift-add)", 3, eb + 3),
                         Unit::adder("error accumulate", 4, eb),
                     ],
-                    ..Cost::default()
-                }
+                    vec![],
+                )
             }
         }
     }

@@ -4,7 +4,15 @@ use super::layers::LayerPlan;
 use super::lens::LensMap;
 use crate::config::DofCfg;
 use crate::fixed::{QFormat, SignalStats};
-use crate::stage::{Cost, Unit};
+use crate::stage::{Cost, MemImage, Memory, Unit};
+use std::sync::Arc;
+
+/// Name of the line buffers.
+pub const LINE_BUFFERS: &str = "dof line buffers";
+/// Name of the composite buffer.
+pub const COMPOSITE: &str = "dof composite buffer";
+/// Name of the coefficient ROM.
+pub const COEF_ROM: &str = "dof coefficient ROM";
 
 /// Cost of the datapath: line buffers for the largest mask, the composite buffer, the
 /// coefficient ROM and the arithmetic units by width.
@@ -20,19 +28,20 @@ pub fn cost(
     let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0) as u64;
     let a_bits = n2.next_power_of_two().trailing_zeros() + 1;
     let alpha_line = a_bits + p.coef_bits + 1;
-    let line = (2 * m_max + 1) * width * (p.line_bits + alpha_line) as u64;
-    let composite = width * height * (code_bits + p.guard_bits) as u64;
-    let rom: u64 = plan
-        .layers
-        .iter()
-        .map(|l| (l.m as u64 + 1) * (p.coef_bits + 1) as u64)
-        .sum();
+    let rom_words: u64 = plan.layers.iter().map(|l| l.m as u64 + 1).sum();
     let taps = (2 * m_max + 1) as u32;
     let xm_bits = code_bits + a_bits;
-    Cost {
-        storage_bits: line + composite,
-        lut_bits: rom,
-        adders: vec![
+    Cost::new(
+        vec![
+            Memory::ram(
+                LINE_BUFFERS,
+                (2 * m_max + 1) * width,
+                p.line_bits + alpha_line,
+            ),
+            Memory::ram(COMPOSITE, width * height, code_bits + p.guard_bits),
+            Memory::rom(COEF_ROM, rom_words, p.coef_bits + 1),
+        ],
+        vec![
             Unit::adder("horizontal tap sum (intensity)", taps, p.line_bits),
             Unit::adder("vertical tap sum (intensity)", taps, p.acc_bits),
             Unit::adder("alpha tap sums", 2 * taps, 2 * p.coef_bits + a_bits + 1),
@@ -42,7 +51,7 @@ pub fn cost(
                 code_bits + p.guard_bits + p.alpha_bits,
             ),
         ],
-        multipliers: vec![
+        vec![
             Unit::mul("sigma = G (z - z_e)", 1, lens.z_frac + 1, lens.g_bits()),
             Unit::mul("premultiply x * coverage", 1, code_bits, a_bits),
             Unit::mul("horizontal taps", taps, xm_bits, p.coef_bits + 1),
@@ -61,7 +70,18 @@ pub fn cost(
                 p.alpha_bits + 1,
             ),
         ],
-    }
+    )
+}
+
+/// The coefficient ROM's contents: per layer (far to near) the centre tap and the taps on
+/// one side (the masks are symmetric), `coef_bits + 1` bits each.
+pub fn coefficient_image(plan: &LayerPlan, p: &DofCfg) -> MemImage {
+    let words: Vec<u64> = plan
+        .layers
+        .iter()
+        .flat_map(|l| l.coef[l.m..].iter().copied())
+        .collect();
+    MemImage::table(COEF_ROM, p.coef_bits + 1, Arc::new(words))
 }
 
 /// Stats record for an overflow count of an integer word of `bits` bits (`UQ<bits>.0`).

@@ -81,7 +81,9 @@ mod mask;
 mod reference;
 mod stage;
 
-pub use cost::{cost, overflow_signal, overflow_signal_in};
+pub use cost::{
+    COEF_ROM, COMPOSITE, LINE_BUFFERS, coefficient_image, cost, overflow_signal, overflow_signal_in,
+};
 pub use fixed::{
     DofWork, LayerPlanes, MacOut, border_sum, layered_fixed, layered_fixed_observed, row_mac,
 };
@@ -93,4 +95,4 @@ pub use reference::{
     RegionError, additive_layered, edge_band, local_error, per_pixel_scatter, region_error,
     weber_linear,
 };
-pub use stage::run_stage;
+pub use stage::Dof;

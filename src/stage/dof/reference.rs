@@ -182,8 +182,8 @@ pub fn weber_linear(
     b: &[f64],
     white: f64,
     d: &crate::scene::Display,
-) -> crate::compare::WeberCompare {
+) -> crate::stage::WeberCompare {
     let (lo, hi) = (d.b_min(), d.b_max);
     let lum = |v: f64| lo + (hi - lo) * (v / white).clamp(0.0, 1.0);
-    crate::compare::weber_of(a.iter().zip(b).map(|(&x, &y)| (lum(x), lum(y))), d.weber)
+    crate::stage::weber_of(a.iter().zip(b).map(|(&x, &y)| (lum(x), lum(y))), d.weber)
 }

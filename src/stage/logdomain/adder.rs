@@ -14,7 +14,15 @@ use crate::fixed::{
     Overflow, QFormat, Quant, Quantized, Quantizer, SignalStats, quantize_slice_f64,
     round_shift_i64,
 };
-use crate::stage::{Cost, Unit};
+use crate::stage::{Cost, MemImage, Memory, Unit};
+use std::sync::Arc;
+
+/// Name of the log frame memory (structure b): the accumulate stage's frame memory.
+pub const LOG_FRAME_MEMORY: &str = "frame memory";
+/// Name of the log-weight ROM.
+pub const LOG_WEIGHT_ROM: &str = "log weight ROM";
+/// Name of the Gaussian-logarithm table.
+pub const SB_TABLE: &str = "sb table";
 
 /// Rounding of the sb-table address (direct lookup) and of the interpolated slope: `RND`
 /// (ties up), fixed, as the RTL `log_adder.v` computes them.
@@ -258,21 +266,48 @@ impl LogAdder {
     pub fn cost(&self, pixels: u64) -> Cost {
         let fb = self.frame_bits();
         let db = self.table_data_bits();
-        let mut c = Cost {
-            storage_bits: pixels * fb as u64,
-            lut_bits: self.log_w.len() as u64 * fb as u64 + self.sb.len() as u64 * db as u64,
-            adders: vec![
-                Unit::adder("log I + log S", 1, fb),
-                Unit::adder("|la - lb| and max", 1, fb),
-                Unit::adder("max + sb", 1, fb + self.tf),
-            ],
-            multipliers: vec![],
-        };
+        let mut adders = vec![
+            Unit::adder("log I + log S", 1, fb),
+            Unit::adder("|la - lb| and max", 1, fb),
+            Unit::adder("max + sb", 1, fb + self.tf),
+        ];
+        let mut multipliers = vec![];
         if self.interpolate && self.shift > 0 {
-            c.adders.push(Unit::adder("sb interpolation", 2, db));
-            c.multipliers
-                .push(Unit::mul("sb slope x offset", 1, db, self.shift));
+            adders.push(Unit::adder("sb interpolation", 2, db));
+            multipliers.push(Unit::mul("sb slope x offset", 1, db, self.shift));
         }
-        c
+        Cost::new(
+            vec![
+                Memory::ram(LOG_FRAME_MEMORY, pixels, fb),
+                Memory::rom(LOG_WEIGHT_ROM, self.log_w.len() as u64, fb),
+                Memory::rom(SB_TABLE, self.sb.len() as u64, db),
+            ],
+            adders,
+            multipliers,
+        )
+    }
+
+    /// The log-weight ROM (two's complement in the frame word's width) and the sb table.
+    pub fn images(&self) -> Vec<MemImage> {
+        let fb = self.frame_bits();
+        let mask = if fb >= 64 { u64::MAX } else { (1u64 << fb) - 1 };
+        let lw = Arc::new(self.log_w.clone());
+        let sb = Arc::new(self.sb.clone());
+        vec![
+            MemImage {
+                name: LOG_WEIGHT_ROM.into(),
+                fields: vec![fb],
+                words: lw.len(),
+                region_only: false,
+                get: Arc::new(move |w, _| (lw[w] as u64) & mask),
+            },
+            MemImage {
+                name: SB_TABLE.into(),
+                fields: vec![self.table_data_bits()],
+                words: sb.len(),
+                region_only: false,
+                get: Arc::new(move |w, _| sb[w] as u64),
+            },
+        ]
     }
 }

@@ -3,7 +3,13 @@
 //! and record their quantisation as signals (`logdomain.threshold`, `logdomain.potentiation`).
 
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, SignalStats, quantize_slice_f64};
-use crate::stage::{Cost, Unit};
+use crate::stage::{Cost, MemImage, Memory, Unit};
+use std::sync::Arc;
+
+/// Name of the encoder's threshold ROM.
+pub const THRESHOLD_ROM: &str = "log encoder threshold ROM";
+/// Name of the potentiation LUT (structure a).
+pub const POTENTIATION_LUT: &str = "potentiation LUT";
 
 /// Checks a contrast for log coding.
 pub fn check_contrast(k: f64) -> std::result::Result<(), String> {
@@ -102,11 +108,23 @@ impl LogEncoder {
     }
     /// Cost: the threshold ROM and one comparator used `bits` times (binary search).
     pub fn cost(&self) -> Cost {
-        Cost {
-            lut_bits: self.thresholds.len() as u64 * self.in_bits as u64,
-            adders: vec![Unit::adder("log encoder compare", 1, self.in_bits)],
-            ..Cost::default()
-        }
+        Cost::new(
+            vec![Memory::rom(
+                THRESHOLD_ROM,
+                self.thresholds.len() as u64,
+                self.in_bits,
+            )],
+            vec![Unit::adder("log encoder compare", 1, self.in_bits)],
+            vec![],
+        )
+    }
+    /// The threshold ROM's contents.
+    pub fn image(&self) -> MemImage {
+        MemImage::table(
+            THRESHOLD_ROM,
+            self.in_bits,
+            Arc::new(self.thresholds.clone()),
+        )
     }
 }
 
@@ -154,9 +172,22 @@ impl PotentiationLut {
     }
     /// Cost: one ROM.
     pub fn cost(&self) -> Cost {
-        Cost {
-            lut_bits: self.table.len() as u64 * self.data_bits as u64,
-            ..Cost::default()
-        }
+        Cost::new(
+            vec![Memory::rom(
+                POTENTIATION_LUT,
+                self.table.len() as u64,
+                self.data_bits,
+            )],
+            vec![],
+            vec![],
+        )
+    }
+    /// The LUT's contents.
+    pub fn image(&self) -> MemImage {
+        MemImage::table(
+            POTENTIATION_LUT,
+            self.data_bits,
+            Arc::new(self.table.clone()),
+        )
     }
 }

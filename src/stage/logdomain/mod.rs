@@ -54,15 +54,13 @@
 mod adder;
 mod code;
 mod lut;
-mod ramp;
 mod stage;
 mod sums;
 
-pub use adder::{LogAdder, ZERO};
-pub use code::{LogCode, LogEncoder, PotentiationLut, check_contrast};
-pub use lut::{log_gamma_linear, log_gamma_lut};
-pub use ramp::{
-    RAMP_SAMPLES, RampCheck, ramp, ramp_linear, ramp_log, ramp_visible_contours, validate_widths,
+pub use adder::{LOG_FRAME_MEMORY, LOG_WEIGHT_ROM, LogAdder, SB_TABLE, ZERO};
+pub use code::{
+    LogCode, LogEncoder, POTENTIATION_LUT, PotentiationLut, THRESHOLD_ROM, check_contrast,
 };
-pub use stage::{accumulate_phase, encode_phase, log_code, post};
+pub use lut::{log_gamma_linear, log_gamma_lut};
+pub use stage::{Logdomain, log_code};
 pub use sums::{LogWork, accumulate_pixel, accumulate_pixel_f64, add_term, local_add};

@@ -4,7 +4,7 @@
 use crate::args::{SceneArgs, arg_error};
 use clap::Args;
 use igemu::error::Error;
-use igemu::pipeline::RenderOptions;
+use igemu::stage::RunOptions;
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -35,7 +35,7 @@ pub fn run(a: CheckArgs) -> Result<ExitCode, Error> {
             format!("must be in 0..=1, got {f}"),
         ));
     }
-    let r = a.s.render(RenderOptions { stage_local: false })?;
+    let r = a.s.render(RunOptions::FAST)?;
     let c = &r.report.end_to_end.codes;
     let wv = &r.report.end_to_end.weber;
     let mut failed = Vec::new();

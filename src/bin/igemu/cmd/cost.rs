@@ -5,7 +5,8 @@ use crate::args::SceneArgs;
 use clap::Args;
 use igemu::error::Error;
 use igemu::hdl;
-use igemu::pipeline::{self, RenderOptions};
+use igemu::pipeline;
+use igemu::stage::RunOptions;
 use igemu::stage_id::StageId;
 use std::process::ExitCode;
 
@@ -22,7 +23,7 @@ pub struct CostArgs {
 pub fn run(a: CostArgs) -> Result<ExitCode, Error> {
     let scene = a.s.scene()?;
     let hw = a.s.hw()?;
-    let r = pipeline::render(&scene, &hw, RenderOptions { stage_local: false })?;
+    let r = pipeline::render(&scene, &hw, RunOptions::FAST)?;
     println!(
         "cost | hardware `{}` | scene `{}`{}",
         hw.name,

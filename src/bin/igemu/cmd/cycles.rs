@@ -5,7 +5,8 @@ use crate::args::{SceneArgs, arg_error};
 use crate::print::print_cycles;
 use clap::Args;
 use igemu::error::Error;
-use igemu::pipeline::{self, RenderOptions};
+use igemu::pipeline;
+use igemu::stage::RunOptions;
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -32,7 +33,7 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
         igemu::config::check_clock(mhz).map_err(|m| arg_error("--clock-mhz", m))?;
         hw.cycles.clock_mhz = mhz;
     }
-    let r = pipeline::render(&scene, &hw, RenderOptions { stage_local: false })?;
+    let r = pipeline::render(&scene, &hw, RunOptions::FAST)?;
     let mut c = r.report.cycles.clone();
     if let Some(path) = &a.vcd {
         let io = |e: std::io::Error| Error::Io {
@@ -40,20 +41,26 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
             source: e,
         };
         let file = std::fs::File::create(path).map_err(io)?;
-        let fifo: Vec<bool> = (0..cycles::CYCLE_STAGES.len())
-            .map(|i| r.workload.has_fifo(i))
-            .collect();
-        let mut w = VcdWriter::new(std::io::BufWriter::new(file), &fifo, hw.cycles.clock_mhz)
-            .map_err(io)?;
-        let planned = c.plan.stages.clone();
-        let cost = c.cost.clone();
+        let mut w = VcdWriter::new(
+            std::io::BufWriter::new(file),
+            &r.workload,
+            hw.cycles.clock_mhz,
+        )
+        .map_err(io)?;
+        let t = std::time::Instant::now();
+        let sim = cycles::simulate(
+            &r.workload,
+            Some(&mut |t, st: &[cycles::State], occ: &[u32]| w.cycle(t, st, occ)),
+        );
+        let wall = t.elapsed().as_secs_f64();
         c = cycles::report(
             &r.workload,
-            &hw.cycles,
-            &planned,
+            r.plan.order(),
+            hw.cycles.clock_mhz,
             scene.display.refresh_hz,
-            cost,
-            Some(&mut |t, st: &[cycles::State], occ: &[u32]| w.cycle(t, st, occ)),
+            c.cost.clone(),
+            &sim,
+            wall,
         );
         w.finish(c.total_cycles).map_err(io)?;
     }

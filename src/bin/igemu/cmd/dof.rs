@@ -2,7 +2,7 @@
 
 use crate::args::arg_error;
 use clap::Args;
-use igemu::calc;
+use igemu::analysis::calc;
 use igemu::error::Error;
 use std::process::ExitCode;
 

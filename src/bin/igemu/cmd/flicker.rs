@@ -41,7 +41,7 @@ pub fn run(a: FlickerArgs) -> Result<ExitCode, Error> {
     if a.no_gamma_correction {
         hw.gamma.correction = false;
     }
-    let r = igemu::flicker::flicker(&hw, a.phases)?;
+    let r = igemu::analysis::flicker::flicker(&hw, a.phases)?;
     if a.json {
         println!(
             "{}",

@@ -3,9 +3,9 @@
 
 use crate::args::{ExportArg, SceneArgs};
 use clap::Args;
+use igemu::analysis::ranges;
 use igemu::error::Error;
-use igemu::pipeline::RenderOptions;
-use igemu::sweep::ranges;
+use igemu::stage::RunOptions;
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -27,7 +27,7 @@ pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
         print!("{}", ranges::export(&hw, e.into()));
         return Ok(ExitCode::SUCCESS);
     }
-    let r = a.s.render(RenderOptions { stage_local: false })?;
+    let r = a.s.render(RunOptions::FAST)?;
     let rows = ranges::ranges(&r.report.stages);
     if a.json {
         println!(

@@ -2,12 +2,13 @@
 //! reference; write the image, the optional reference, difference, banding and stage dumps,
 //! and the report (text, JSON on stdout or a JSON file).
 
-use crate::args::{SceneArgs, arg_error};
+use crate::args::{DumpTap, SceneArgs, arg_error, parse_dump};
 use crate::print::print_report;
 use clap::Args;
 use igemu::error::Error;
 use igemu::output;
-use igemu::pipeline::{self, RenderOptions};
+use igemu::pipeline;
+use igemu::stage::RunOptions;
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -23,9 +24,12 @@ pub struct RenderArgs {
     /// Also write the difference map (128 = identical, 32 grey levels per code).
     #[arg(long)]
     pub diff_out: Option<String>,
-    /// Write a stage's raw codes as a 16-bit grey PNG: STAGE=PATH with STAGE one of accumulate, coverage, depth, gamma.
-    #[arg(long = "dump", value_name = "STAGE=PATH")]
-    pub dump: Vec<String>,
+    /// Write a tap after a stage as a 16-bit grey PNG: TAP=PATH, TAP one of accumulate[.frame], accumulate.depth, accumulate.coverage, dof[.frame], dof.depth, dof.coverage, gamma[.codes], dither[.codes].
+    #[arg(long = "dump", value_name = "TAP=PATH", value_parser = parse_dump)]
+    pub dump: Vec<(DumpTap, String)>,
+    /// Write the memory images of the plan (LUTs, ROMs, frame memory) as $readmemh hex files with a manifest.json of widths and depths into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub rom_out: Option<String>,
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -45,26 +49,13 @@ pub struct RenderArgs {
 
 /// Runs `igemu render`; returns the exit code.
 pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
-    let mut dumps = Vec::new();
-    for d in &a.dump {
-        let Some((stage, path)) = d.split_once('=') else {
-            return Err(arg_error("--dump", format!("`{d}` is not STAGE=PATH")));
-        };
-        if !["accumulate", "coverage", "depth", "gamma"].contains(&stage) {
-            return Err(arg_error(
-                "--dump",
-                format!("unknown stage `{stage}`; allowed: accumulate, coverage, depth, gamma"),
-            ));
-        }
-        dumps.push((stage.to_string(), path.to_string()));
-    }
-    let r = pipeline::render_ext(
+    let r = pipeline::render(
         &a.s.scene()?,
         &a.s.hw()?,
-        RenderOptions {
+        RunOptions {
             stage_local: !a.no_local,
+            dof_reference: a.dof_reference,
         },
-        a.dof_reference,
     )?;
     let (w, h) = (r.report.scene.width, r.report.scene.height);
     output::write_dac(&a.out, &r.dac, w, h, r.dac_bits)?;
@@ -79,19 +70,33 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
             igemu::perceptual::banding_image(&r.dac, &r.contour_map, (1u32 << r.dac_bits) - 1);
         output::write_raw8(p, &img, w, h)?;
     }
-    for (stage, path) in &dumps {
-        let codes: Vec<u32> = match stage.as_str() {
-            "accumulate" => r.frame.acc.clone(),
-            "coverage" => r.frame.coverage.iter().map(|&c| c as u32).collect(),
-            "depth" => r
-                .frame
-                .depth
-                .iter()
-                .map(|&z| if z == u32::MAX { 65535 } else { z >> 8 })
-                .collect(),
-            _ => r.dac.iter().map(|&c| c as u32).collect(),
-        };
+    for (tap, path) in &a.dump {
+        let taps = r.taps(tap.stage).ok_or_else(|| {
+            arg_error(
+                "--dump",
+                format!(
+                    "stage `{}` is not in the plan of this render: {}",
+                    tap.stage,
+                    r.plan
+                        .decisions
+                        .iter()
+                        .find(|d| d.stage == tap.stage)
+                        .map_or("", |d| d.need.reason.as_str())
+                ),
+            )
+        })?;
+        let codes = taps
+            .image(tap.plane)
+            .expect("the planes of a stage are on its taps");
         output::write_raw16(path, &codes, w, h)?;
+    }
+    if let Some(dir) = &a.rom_out {
+        let stages: Vec<_> = r
+            .steps
+            .iter()
+            .map(|s| (s.id, &s.outcome.report.cost, s.outcome.images.as_slice()))
+            .collect();
+        igemu::cost::rom::write(std::path::Path::new(dir), &stages)?;
     }
     let json = serde_json::to_string_pretty(&r.report).expect("serialisable");
     if let Some(p) = &a.report {

@@ -96,7 +96,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
             })?;
         }
     }
-    let cache = sweep::cache::PhaseCache::new();
+    let cache = igemu::pipeline::Cache::new();
     let opts = sweep::SweepOptions {
         out: &a.out,
         resume: a.resume,

@@ -4,7 +4,7 @@
 use crate::args::{arg_error, load_scene};
 use crate::print::print_width_checks;
 use clap::Args;
-use igemu::calc;
+use igemu::analysis::calc;
 use igemu::error::Error;
 use std::process::ExitCode;
 
@@ -49,7 +49,7 @@ pub fn run(a: WidthsArgs) -> Result<ExitCode, Error> {
     let weber = need(a.weber, display.as_ref().map(|d| d.weber), "--weber")?;
     let gamma = a.gamma.or(display.as_ref().map(|d| d.gamma)).unwrap_or(2.4);
     let w = calc::widths(contrast, weber, gamma).map_err(|m| arg_error("widths", m))?;
-    let checks = igemu::stage::logdomain::validate_widths(&w);
+    let checks = igemu::analysis::widths::validate_widths(&w);
     if a.json {
         let mut v = serde_json::to_value(&w).expect("serialisable");
         v["validation"] = serde_json::to_value(&checks).expect("serialisable");

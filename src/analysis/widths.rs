@@ -1,9 +1,9 @@
 //! Width validation by emulation (`igemu widths`): a smooth ramp through the intensity path,
 //! linear or log coded (docs/reference.md §1, eq. 9-11), and the visible contours it shows.
 
-use super::code::LogCode;
 use crate::compare::DisplayModel;
 use crate::stage::gamma::GammaSpec;
+use crate::stage::logdomain::LogCode;
 use serde::Serialize;
 
 /// Samples of the built-in ramp.
@@ -57,8 +57,8 @@ pub fn ramp_log(x: &[f64], k: f64, bits: u32, dac_bits: u32, gamma: f64) -> Vec<
         .collect()
 }
 
-/// Emulates the recommended widths of [`crate::calc::widths`] and one bit narrower in each.
-pub fn validate_widths(w: &crate::calc::Widths) -> Vec<RampCheck> {
+/// Emulates the recommended widths of [`crate::analysis::calc::widths`] and one bit narrower in each.
+pub fn validate_widths(w: &crate::analysis::calc::Widths) -> Vec<RampCheck> {
     let x = ramp(w.contrast);
     let display = DisplayModel {
         b_min: 1.0,

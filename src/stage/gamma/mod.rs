@@ -4,8 +4,11 @@
 //! The float reference applies the same formula to the real-valued frame intensity
 //! (clamped to [0, 1] of full white) and quantises only at the DAC, with the same rounding.
 
-use super::{Cost, Unit};
+use super::{Cost, Memory, Unit};
+use crate::config::HwConfig;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
+use crate::fnv::Fnv;
+use crate::scene::Scene;
 use rayon::prelude::*;
 
 /// The LUT and what it can reach.
@@ -29,6 +32,17 @@ pub struct GammaSpec {
 }
 
 impl GammaSpec {
+    /// The spec of a scene's display and the `[gamma]` section (the LUT corrects
+    /// `gamma.gamma`, or the display's gamma when it is not given).
+    pub fn of(scene: &Scene, hw: &HwConfig) -> Self {
+        Self::new(
+            hw.gamma.gamma.unwrap_or(scene.display.gamma),
+            hw.gamma.correction,
+            hw.gamma.dac_bits,
+            hw.gamma.quant,
+        )
+    }
+
     /// Builds the spec; `correction = false` gives a linear LUT.
     pub fn new(gamma: f64, correction: bool, dac_bits: u32, quant: Quant) -> Self {
         Self {
@@ -102,13 +116,13 @@ impl GammaLut {
         });
     }
 
-    /// Cost: one ROM.
-    pub fn cost(&self) -> Cost {
-        Cost {
-            lut_bits: self.table.len() as u64 * self.dac_bits as u64,
-            adders: vec![Unit::adder("LUT address", 1, self.addr_bits)],
-            ..Cost::default()
-        }
+    /// Cost: one ROM (named `name`) and its address register.
+    pub fn cost(&self, name: &str) -> Cost {
+        Cost::new(
+            vec![Memory::rom(name, self.table.len() as u64, self.dac_bits)],
+            vec![Unit::adder("LUT address", 1, self.addr_bits)],
+            vec![],
+        )
     }
 }
 
@@ -127,3 +141,29 @@ pub fn apply_powers(spec: &GammaSpec, powers: &[f64], out: &mut [u16]) {
         .zip(powers.par_iter())
         .for_each(|(o, &p)| *o = spec.dac.quantize_f64(spec.scale(p)).code as u16);
 }
+
+/// The memo key of a frame's [`powers`]: the frame's key (the key of the stage that last
+/// wrote it, or any stage after it) and the exponent.
+pub fn powers_key(frame_key: u64, spec: &GammaSpec) -> u64 {
+    Fnv::new()
+        .u64(frame_key)
+        .str("gamma powers")
+        .u64(spec.exponent.to_bits())
+        .finish()
+}
+
+/// The DAC-independent part of the float reference after the gamma curve:
+/// `clamp(frame_ref / white, 0, 1)^exponent` per pixel ([`GammaSpec::power`]), with
+/// `white` the frame's full white in frame LSBs. Shared by every DAC width and dither of a
+/// sweep (and by the contour metric's ideal image).
+pub fn powers(frame_ref: &[f64], hw: &HwConfig, spec: &GammaSpec) -> Vec<f64> {
+    let ff = hw.accumulate.frame.format;
+    let white_lsb = (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64;
+    frame_ref
+        .par_iter()
+        .map(|&v| spec.power(v / white_lsb))
+        .collect()
+}
+
+mod stage;
+pub use stage::Gamma;

@@ -17,8 +17,9 @@ use crate::compare::DisplayModel;
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::files::TomlFile;
-use crate::pipeline::{self, RenderOptions};
+use crate::pipeline;
 use crate::scene::Scene;
+use crate::stage::RunOptions;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -109,14 +110,14 @@ fn one(object: &str, u: f64, v: f64, hw: &HwConfig) -> Result<Phase> {
     let sample = 1.0 / hw.raster.samples as f64;
     let text = scene_text(&object_text(object, u, v, i, sample));
     let scene = Scene::from_toml(&TomlFile::from_text("flicker.toml", &text))?;
-    let r = pipeline::render(&scene, hw, RenderOptions { stage_local: false })?;
+    let r = pipeline::render(&scene, hw, RunOptions::FAST)?;
     let mut d = scene.display.clone();
     if let Some(g) = hw.gamma.gamma {
         d.gamma = g;
     }
     let m = DisplayModel::new(&d, hw.gamma.dac_bits);
     let b0 = m.luminance(0);
-    let acc: u64 = r.frame.acc.iter().map(|&a| a as u64).sum();
+    let acc: u64 = r.frame().acc.iter().map(|&a| a as u64).sum();
     let lum: Vec<f64> = r.dac.iter().map(|&c| m.luminance(c) - b0).collect();
     Ok(Phase {
         acc,

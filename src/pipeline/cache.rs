@@ -1,0 +1,159 @@
+//! Reuse of unchanged stages: the pipeline's cache of stage outcomes, keyed by the stage's
+//! key (its config section, options and plan parts, chained with its input's key), so a
+//! sweep recomputes only from the first stage whose inputs changed. It also keeps values
+//! stages share through [`Memo`] (e.g. the float gamma curve of one frame) and cycle
+//! simulations (keyed by their workload).
+//!
+//! Entries are shared read-only (`Arc`), so a reused result is identical to a recomputed
+//! one. A key being computed by one thread is waited for by the others (each stage result
+//! is computed once). The least recently used entries beyond the capacity are dropped.
+
+use super::run::Outcome;
+use crate::cycles::SimResult;
+use crate::error::Result;
+use crate::stage::Memo;
+use std::any::Any;
+use std::collections::HashMap;
+use std::convert::Infallible;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::{Arc, Mutex};
+
+/// Stage outcomes kept.
+pub const STAGE_CAPACITY: usize = 64;
+/// Memo values kept.
+pub const MEMO_CAPACITY: usize = 32;
+/// Simulations kept.
+pub const SIM_CAPACITY: usize = 64;
+
+type Slot<T> = Arc<Mutex<Option<T>>>;
+
+/// A map of single-flight slots with least-recently-used eviction.
+struct Lru<T> {
+    map: Mutex<HashMap<u64, (Slot<T>, u64)>>,
+    tick: AtomicU64,
+    capacity: usize,
+}
+
+impl<T: Clone> Lru<T> {
+    fn new(capacity: usize) -> Self {
+        Self {
+            map: Mutex::new(HashMap::new()),
+            tick: AtomicU64::new(0),
+            capacity,
+        }
+    }
+
+    /// The value under `key` (and `true`), or `make()`'s (then stored) and `false`. Errors
+    /// are not stored.
+    fn get_or<E>(
+        &self,
+        key: u64,
+        make: impl FnOnce() -> std::result::Result<T, E>,
+    ) -> std::result::Result<(T, bool), E> {
+        let slot = {
+            let mut m = self.map.lock().unwrap_or_else(|e| e.into_inner());
+            let now = self.tick.fetch_add(1, Relaxed);
+            let slot = match m.get_mut(&key) {
+                Some((s, used)) => {
+                    *used = now;
+                    s.clone()
+                }
+                None => {
+                    let s: Slot<T> = Arc::new(Mutex::new(None));
+                    m.insert(key, (s.clone(), now));
+                    s
+                }
+            };
+            if m.len() > self.capacity
+                && let Some(&old) = m.iter().min_by_key(|(_, (_, u))| *u).map(|(k, _)| k)
+            {
+                m.remove(&old);
+            }
+            slot
+        };
+        let mut v = slot.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(x) = &*v {
+            return Ok((x.clone(), true));
+        }
+        let x = make()?;
+        *v = Some(x.clone());
+        Ok((x, false))
+    }
+}
+
+/// The pipeline's cache (shared between threads).
+pub struct Cache {
+    stages: Lru<Arc<Outcome>>,
+    memo: Lru<Arc<dyn Any + Send + Sync>>,
+    sims: Lru<Arc<(SimResult, f64)>>,
+    hits: AtomicU64,
+    misses: AtomicU64,
+}
+
+impl Default for Cache {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Cache {
+    /// An empty cache.
+    pub fn new() -> Self {
+        Self {
+            stages: Lru::new(STAGE_CAPACITY),
+            memo: Lru::new(MEMO_CAPACITY),
+            sims: Lru::new(SIM_CAPACITY),
+            hits: AtomicU64::new(0),
+            misses: AtomicU64::new(0),
+        }
+    }
+
+    /// The outcome of the stage with key `key`: cached (and `true`), or `run()` (then cached).
+    pub fn stage(
+        &self,
+        key: u64,
+        run: impl FnOnce() -> Result<Outcome>,
+    ) -> Result<(Arc<Outcome>, bool)> {
+        let r = self.stages.get_or(key, || run().map(Arc::new))?;
+        if r.1 {
+            self.hits.fetch_add(1, Relaxed);
+        } else {
+            self.misses.fetch_add(1, Relaxed);
+        }
+        Ok(r)
+    }
+
+    /// The simulation of the workload with key `key` and its wall time (s): cached, or
+    /// `run()`.
+    pub fn sim(
+        &self,
+        key: u64,
+        run: impl FnOnce() -> (SimResult, f64),
+    ) -> (Arc<(SimResult, f64)>, bool) {
+        match self
+            .sims
+            .get_or(key, || Ok::<_, Infallible>(Arc::new(run())))
+        {
+            Ok(v) => v,
+            Err(e) => match e {},
+        }
+    }
+
+    /// Stage (hits, misses) so far.
+    pub fn stats(&self) -> (u64, u64) {
+        (self.hits.load(Relaxed), self.misses.load(Relaxed))
+    }
+}
+
+impl Memo for Cache {
+    fn get_or_make(
+        &self,
+        key: u64,
+        make: &mut dyn FnMut() -> Arc<dyn Any + Send + Sync>,
+    ) -> Arc<dyn Any + Send + Sync> {
+        match self.memo.get_or(key, || Ok::<_, Infallible>(make())) {
+            Ok((v, _)) => v,
+            Err(e) => match e {},
+        }
+    }
+}

@@ -1,0 +1,147 @@
+//! The pipeline: the plan ([`plan`]), the runner that executes it through the stage
+//! contract ([`run`]), the cache that reuses unchanged stages ([`cache`]) and the report
+//! ([`report`]).
+//!
+//! A render is: build the plan (which stages, why, region, tiles), run the planned stages in
+//! order (each fixed model, its float reference and its stage-local comparison), compare
+//! the DAC codes end to end, and simulate the cycle model on the stages' tokens.
+
+pub mod cache;
+pub mod plan;
+pub mod report;
+pub mod run;
+
+pub use cache::Cache;
+pub use plan::{Plan, guard_band};
+pub use report::Report;
+pub use run::{Outcome, Step};
+
+use crate::config::HwConfig;
+use crate::cycles::Workload;
+use crate::error::Result;
+use crate::scene::Scene;
+use crate::stage::accumulate::Frame;
+use crate::stage::{RunOptions, StageId, Taps};
+
+/// Everything a render produces.
+pub struct Render {
+    /// The report.
+    pub report: Report,
+    /// The plan it ran.
+    pub plan: Plan,
+    /// Every stage run, in order, with the taps after it.
+    pub steps: Vec<Step>,
+    /// Fixed DAC codes, row-major.
+    pub dac: Vec<u16>,
+    /// Float reference DAC codes.
+    pub dac_ref: Vec<u16>,
+    /// DAC width.
+    pub dac_bits: u32,
+    /// The cycle model's workload (to re-simulate with other timings or a VCD trace).
+    pub workload: Workload,
+    /// Per pixel: 0 not smooth, 1 smooth, 2 next to a visible contour step.
+    pub contour_map: Vec<u8>,
+}
+
+impl Render {
+    /// The taps after stage `id` (`None` when the plan did not run it).
+    pub fn taps(&self, id: StageId) -> Option<&Taps> {
+        self.steps
+            .iter()
+            .find(|s| s.id == id)
+            .map(|s| &s.outcome.taps)
+    }
+    /// The taps after the last stage.
+    pub fn last(&self) -> &Taps {
+        &self.steps.last().expect("a plan runs stages").outcome.taps
+    }
+    /// The frame memory the gamma stage read (after depth of field for a thin lens).
+    pub fn frame(&self) -> &Frame {
+        &self.last().fixed.frame().frame
+    }
+    /// The cycle model's workload of this run under other timings (same tokens).
+    pub fn workload_for(&self, c: &crate::config::CyclesCfg) -> Workload {
+        report::workload(&self.plan, &self.steps, c)
+    }
+    /// The float reference's frame (frame LSBs) the gamma stage read.
+    pub fn frame_ref(&self) -> &[f64] {
+        self.last().float.frame()
+    }
+}
+
+/// Renders the scene through the plan, fixed and float, and compares them.
+pub fn render(scene: &Scene, hw: &HwConfig, opts: RunOptions) -> Result<Render> {
+    render_with(scene, hw, opts, None)
+}
+
+/// [`render`] reusing (and filling) `cache`: every stage whose key is cached is not run
+/// again. The result is identical to an uncached render.
+pub fn render_with(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RunOptions,
+    cache: Option<&Cache>,
+) -> Result<Render> {
+    let plan = plan::build(scene, hw)?;
+    let steps = run::run(scene, hw, &plan, opts, cache, None)?;
+    let taps = &steps.last().expect("a plan runs stages").outcome.taps;
+    let px = taps.fixed.pixels();
+    let dac: Vec<u16> = px.codes.iter().map(|&c| c as u16).collect();
+    let dac_ref: Vec<u16> = match taps.float.pixels() {
+        crate::stage::PixelTapF::Codes(c) => c.iter().map(|&c| c as u16).collect(),
+        crate::stage::PixelTapF::Values(_) => {
+            unreachable!("the last stage writes DAC codes")
+        }
+    };
+    let ideal = report::ideal(scene, hw, &steps, cache);
+    let (report, workload, contour_map) = report::build(
+        scene,
+        hw,
+        &plan,
+        &steps,
+        &dac,
+        &dac_ref,
+        &ideal.ideal,
+        cache,
+    );
+    Ok(Render {
+        report,
+        plan,
+        steps,
+        dac,
+        dac_ref,
+        dac_bits: hw.gamma.dac_bits,
+        workload,
+        contour_map,
+    })
+}
+
+/// Runs the plan through stage `last` and returns the taps after it (for test vectors and
+/// stage-level tests). Errors when the plan does not run `last`.
+pub fn run_through(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RunOptions,
+    last: StageId,
+) -> Result<(Plan, Taps)> {
+    let plan = plan::build(scene, hw)?;
+    if !plan.layout.has(last) {
+        return Err(crate::error::Error::File(crate::error::FileError {
+            file: hw.name.clone(),
+            line: None,
+            col: None,
+            field: String::new(),
+            msg: format!(
+                "the plan for scene `{}` does not run stage `{last}` ({})",
+                scene.name,
+                plan.decisions
+                    .iter()
+                    .find(|d| d.stage == last)
+                    .map_or(String::new(), |d| d.need.reason.clone())
+            ),
+        }));
+    }
+    let steps = run::run(scene, hw, &plan, opts, None, Some(last))?;
+    let taps = steps.last().expect("the plan runs it").outcome.taps.clone();
+    Ok((plan, taps))
+}

@@ -1,0 +1,276 @@
+//! The plan: built from the scene and the hardware before any stage runs, and then data
+//! (printed, in the JSON report, the source of the cycle chains).
+//!
+//! * **Stages.** Every stage says whether this scene and hardware need it and why
+//!   ([`crate::stage::Stage::plan`]); the planned ones run in flow order, except a stage that
+//!   asks to run before another (the dither placed before the gamma LUT).
+//! * **Region.** The host front end (f64: tessellation, transform, projection, shading;
+//!   not a modelled stage) gives the screen-space primitives; their vertex coordinates
+//!   quantised with `input.coord` (exactly as the input stage will) bound each primitive,
+//!   widened by the filter's apron. The union, clipped to the screen, is the region: every
+//!   pixel outside it sees only background samples and takes the background code.
+//! * **Tiles.** Each primitive is binned to the `cycles.tile`-sized tiles it can reach
+//!   inside the region (as a tiling rasteriser bins at setup): a triangle to the tiles whose
+//!   pixels' filter windows hold a sample centre it meets (a separating-axis test on its
+//!   quantised vertices), a line or a light point to the tiles of its box. The accumulate
+//!   stage computes the pixels of binned tiles only; the cycle model has one pixel-chain
+//!   token per binned tile. A binned tile may hold only background samples (a sliver that
+//!   covers no sample centre, a hidden light point); it is computed anyway, like the
+//!   hardware would, and its pixels come out as the background code.
+
+use crate::config::HwConfig;
+use crate::error::{FileError, Result};
+use crate::fnv::Fnv;
+use crate::scene::{GuardBand, HostScene, Scene, front_end};
+use crate::stage::accumulate::{Kernel, sample_region};
+use crate::stage::{
+    self, Grid, Layout, Need, Region, SampleRegion, StageId, Tiles, input, ms_since,
+};
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One stage's entry in the plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Decision {
+    /// The stage.
+    pub stage: StageId,
+    /// Whether it runs, why, and where.
+    #[serde(flatten)]
+    pub need: Need,
+}
+
+/// The plan of a render.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// Every stage in flow order, in or out, with the reason.
+    pub decisions: Vec<Decision>,
+    /// The screen layout and the planned stages in run order.
+    pub layout: Layout,
+    /// The host front end's output.
+    pub host: Arc<HostScene>,
+    /// Host front-end wall time, ms.
+    pub host_ms: f64,
+    /// Key of the plan's input (the scene), the root of every stage's key.
+    pub key: u64,
+}
+
+/// The guard band the host clips to, after checking that the coordinate format holds it.
+pub fn guard_band(scene: &Scene, hw: &HwConfig) -> std::result::Result<GuardBand, FileError> {
+    let gb = hw.raster.guard_band as f64;
+    let (w, h) = (scene.image.width as f64, scene.image.height as f64);
+    let f = hw.input.coord.format;
+    let max = f.max_code() as f64 * f.lsb();
+    let need = w.max(h) + gb + 1.0;
+    if need > max {
+        let bits = (need.log2().ceil() as u32) + 1;
+        return Err(FileError {
+            file: hw.name.clone(),
+            line: None,
+            col: None,
+            field: "input.coord".into(),
+            msg: format!(
+                "{f} holds coordinates up to {max} px but the screen ({w}x{h}) plus the guard band ({gb} px) needs {need}; use at least {bits} integer bits"
+            ),
+        });
+    }
+    Ok(GuardBand {
+        x_min: -gb,
+        x_max: w + gb,
+        y_min: -gb,
+        y_max: h + gb,
+    })
+}
+
+/// Which stages run, in which order, with every decision.
+pub fn decide(scene: &Scene, hw: &HwConfig) -> Result<(Vec<Decision>, Vec<StageId>)> {
+    let mut decisions = Vec::new();
+    for id in StageId::ALL {
+        decisions.push(Decision {
+            stage: id,
+            need: stage::get(id).plan(scene, hw)?,
+        });
+    }
+    let mut order: Vec<StageId> = decisions
+        .iter()
+        .filter(|d| d.need.planned && d.need.before.is_none())
+        .map(|d| d.stage)
+        .collect();
+    for d in decisions.iter().filter(|d| d.need.planned) {
+        if let Some(b) = d.need.before {
+            let at = order.iter().position(|&s| s == b).unwrap_or(order.len());
+            order.insert(at, d.stage);
+        }
+    }
+    Ok((decisions, order))
+}
+
+/// Builds the plan: decisions, host front end, region and tiles.
+pub fn build(scene: &Scene, hw: &HwConfig) -> Result<Plan> {
+    let (width, height) = (scene.image.width, scene.image.height);
+    let guard = guard_band(scene, hw)?;
+    let (decisions, order) = decide(scene, hw)?;
+    let t = Instant::now();
+    let host = front_end(scene, &guard);
+    let host_ms = ms_since(t);
+    let grid = Grid::new(hw.raster.samples, hw.subpixel_bits(), width, height);
+    // The filter's apron: a pixel's window reaches `base / 2 + 1` pixels beyond a sample.
+    let apron = hw.accumulate.filter.base() as i64 / 2 + 1;
+    let prints: Vec<input::Footprint> = host
+        .prims
+        .iter()
+        .map(|p| input::footprint(p, hw, apron))
+        .collect();
+    let boxes: Vec<[i64; 4]> = prints.iter().map(|f| f.pixels).collect();
+    let screen = Region {
+        x0: 0,
+        y0: 0,
+        x1: width,
+        y1: height,
+    };
+    let region = region_of(&boxes, &screen);
+    let kernel = Kernel::new(
+        hw.accumulate.filter,
+        grid.n,
+        hw.accumulate.weight_bits,
+        hw.accumulate.gaussian_sigma,
+    );
+    let samples = if region.is_empty() {
+        SampleRegion::default()
+    } else {
+        sample_region(&region, &kernel)
+    };
+    let mut tiles = Tiles::new(hw.cycles.tile, width, height);
+    for f in &prints {
+        let b = clamp(&f.pixels, &screen);
+        match &f.triangle {
+            // A triangle bins only to the tiles whose filter windows' samples it meets.
+            Some(t) => {
+                let window = |r: &Region| sample_window(r, &grid, &kernel);
+                tiles.bin_if(&b, &region, |r| input::triangle_meets(t, window(r)));
+            }
+            None => tiles.bin(&b, &region),
+        }
+    }
+    let key = Fnv::new()
+        .str(env!("CARGO_PKG_VERSION"))
+        .str(&serde_json::to_string(scene).unwrap_or_default())
+        .finish();
+    Ok(Plan {
+        decisions,
+        layout: Layout {
+            grid,
+            region,
+            samples,
+            tiles,
+            order,
+        },
+        host: Arc::new(host),
+        host_ms,
+        key,
+    })
+}
+
+/// The rectangle `[x0, y0, x1, y1]` (coordinate units, closed) of the sample centres the
+/// filter windows of the pixels of `r` read.
+fn sample_window(r: &Region, g: &Grid, k: &Kernel) -> [i64; 4] {
+    let n = g.n as i64;
+    let centre = |c: i64| (2 * c + 1) * g.h;
+    let first = |p: u32| p as i64 * n - k.off;
+    let last = |p: u32| (p as i64 - 1) * n - k.off + k.size as i64 - 1;
+    [
+        centre(first(r.x0)),
+        centre(first(r.y0)),
+        centre(last(r.x1)),
+        centre(last(r.y1)),
+    ]
+}
+
+/// A pixel box `[x0, y0, x1, y1)` (unclamped) clamped to the screen.
+fn clamp(b: &[i64; 4], screen: &Region) -> Region {
+    let cx = |v: i64| v.clamp(0, screen.x1 as i64) as u32;
+    let cy = |v: i64| v.clamp(0, screen.y1 as i64) as u32;
+    Region {
+        x0: cx(b[0]),
+        y0: cy(b[1]),
+        x1: cx(b[2]),
+        y1: cy(b[3]),
+    }
+}
+
+/// The union of the primitives' pixel boxes, clipped to the screen (empty when none).
+fn region_of(boxes: &[[i64; 4]], screen: &Region) -> Region {
+    let Some(first) = boxes.first() else {
+        return Region::default();
+    };
+    let u = boxes.iter().fold(*first, |a, b| {
+        [
+            a[0].min(b[0]),
+            a[1].min(b[1]),
+            a[2].max(b[2]),
+            a[3].max(b[3]),
+        ]
+    });
+    let r = clamp(&u, screen);
+    if r.is_empty() { Region::default() } else { r }
+}
+
+/// The plan as the report shows it.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlanReport {
+    /// Planned stages in run order.
+    pub stages: Vec<String>,
+    /// Every stage, in or out, with the reason.
+    pub decisions: Vec<Decision>,
+    /// Pixels modelled (half-open); the rest is background.
+    pub region: Region,
+    /// Fraction of the screen modelled.
+    pub region_fraction: f64,
+    /// Samples per pixel along an axis.
+    pub samples: u32,
+    /// Gamma the LUT corrects.
+    pub gamma: f64,
+    /// The tile map.
+    pub tiles: TileReport,
+}
+
+/// The tile map in the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct TileReport {
+    /// Tile side, pixels.
+    pub size: u32,
+    /// Tile columns.
+    pub cols: u32,
+    /// Tile rows.
+    pub rows: u32,
+    /// Binned tiles.
+    pub binned: u64,
+    /// Pixels of binned tiles inside the region.
+    pub binned_pixels: u64,
+}
+
+impl Plan {
+    /// The planned stages in run order.
+    pub fn order(&self) -> &[StageId] {
+        &self.layout.order
+    }
+    /// The report form.
+    pub fn report(&self, scene: &Scene, hw: &HwConfig) -> PlanReport {
+        let l = &self.layout;
+        PlanReport {
+            stages: l.order.iter().map(|s| s.name().to_string()).collect(),
+            decisions: self.decisions.clone(),
+            region: l.region,
+            region_fraction: l.region.pixels() as f64 / l.grid.pixels().max(1) as f64,
+            samples: l.grid.n,
+            gamma: hw.gamma.gamma.unwrap_or(scene.display.gamma),
+            tiles: TileReport {
+                size: l.tiles.size,
+                cols: l.tiles.cols,
+                rows: l.tiles.rows,
+                binned: l.tiles.count() as u64,
+                binned_pixels: l.tiles.touched_pixels(&l.region),
+            },
+        }
+    }
+}

@@ -1,0 +1,233 @@
+//! The render report: the plan, every stage's report, the end-to-end comparison of DAC
+//! codes (code by code, through the display model, visible contours), the cost summary with
+//! the pack checks, the cycle model and the timing.
+
+use super::cache::Cache;
+use super::plan::{Plan, PlanReport};
+use super::run::Step;
+use crate::compare::{self, CodeCompare, DisplayModel, WeberCompare};
+use crate::config::HwConfig;
+use crate::cost;
+use crate::cycles::{self, CycleReport, ScreenFacts, SimResult, Workload};
+use crate::fnv::Fnv;
+use crate::perceptual::{self, ContourReport, IdealImage};
+use crate::scene::{FrontEndStats, Scene};
+use crate::stage::gamma::{GammaSpec, powers, powers_key};
+use crate::stage::{StageId, StageReport, memo};
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Scene facts for the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneInfo {
+    /// Scene name.
+    pub name: String,
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// Host front end counts.
+    pub front_end: FrontEndStats,
+}
+
+/// End-to-end comparison of DAC codes.
+#[derive(Clone, Debug, Serialize)]
+pub struct EndToEnd {
+    /// Code by code.
+    pub codes: CodeCompare,
+    /// Through the display model.
+    pub weber: WeberCompare,
+}
+
+/// Wall times.
+#[derive(Clone, Debug, Serialize)]
+pub struct Timing {
+    /// Host front end (f64, shared by both models).
+    pub host_ms: f64,
+    /// Sum of the fixed stages.
+    pub fixed_ms: f64,
+    /// Sum of the float reference stages.
+    pub float_ms: f64,
+    /// Sum of the stage-local comparisons.
+    pub local_ms: f64,
+    /// Threads used.
+    pub threads: usize,
+}
+
+/// The render report (`render --json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// Tool version.
+    pub igemu_version: String,
+    /// Scene.
+    pub scene: SceneInfo,
+    /// Hardware configuration.
+    pub hardware: HwConfig,
+    /// Plan.
+    pub plan: PlanReport,
+    /// Per stage, in run order.
+    pub stages: Vec<StageReport>,
+    /// Stages whose result came from the cache (sweeps).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub reused: Vec<String>,
+    /// End-to-end comparison.
+    pub end_to_end: EndToEnd,
+    /// Overflows over all signals.
+    pub overflows: u64,
+    /// Total storage bits (RAM).
+    pub storage_bits: u64,
+    /// Total LUT / ROM bits.
+    pub lut_bits: u64,
+    /// Timing.
+    pub timing: Timing,
+    /// Cycle model, throughput and cost summary.
+    pub cycles: CycleReport,
+    /// Visible contours through the display model (see [`crate::perceptual`]).
+    pub contours: ContourReport,
+}
+
+/// The ideal image the contour metric reads (from the float frame before the gamma stage
+/// through the gamma curve), computed once per frame and exponent.
+pub(super) struct Ideal {
+    pub ideal: Arc<IdealImage>,
+}
+
+/// The gamma spec of a scene and hardware.
+pub fn gamma_spec(scene: &Scene, hw: &HwConfig) -> GammaSpec {
+    GammaSpec::new(
+        hw.gamma.gamma.unwrap_or(scene.display.gamma),
+        hw.gamma.correction,
+        hw.gamma.dac_bits,
+        hw.gamma.quant,
+    )
+}
+
+/// The ideal image of the frame the gamma stage reads (the float frame after the last stage
+/// before gamma), memoised in `cache`.
+pub(super) fn ideal(scene: &Scene, hw: &HwConfig, steps: &[Step], cache: Option<&Cache>) -> Ideal {
+    let spec = gamma_spec(scene, hw);
+    let before = steps
+        .iter()
+        .take_while(|s| s.id != StageId::Gamma)
+        .filter(|s| s.outcome.taps.float.frame.is_some())
+        .last()
+        .expect("a frame stage runs before gamma");
+    let frame_ref = before.outcome.taps.float.frame();
+    let m: &dyn crate::stage::Memo = match cache {
+        Some(c) => c,
+        None => &crate::stage::NoMemo,
+    };
+    let pk = powers_key(before.key, &spec);
+    let powers = memo(m, pk, || powers(frame_ref, hw, &spec));
+    let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
+    let ik = Fnv::new().u64(pk).str("ideal image").finish();
+    let ideal = memo(m, ik, || {
+        IdealImage::new(&powers, &display, scene.image.width, scene.image.height)
+    });
+    Ideal { ideal }
+}
+
+/// The cycle model's workload of a run: the planned stages' tokens chained under the
+/// timings `c`.
+pub fn workload(plan: &Plan, steps: &[Step], c: &crate::config::CyclesCfg) -> Workload {
+    let l = &plan.layout;
+    let planned: Vec<(StageId, Option<&crate::stage::Tokens>)> = steps
+        .iter()
+        .map(|s| (s.id, s.outcome.tokens.as_ref()))
+        .collect();
+    Workload::new(
+        &planned,
+        c,
+        ScreenFacts {
+            tile_size: l.tiles.size,
+            tiles_touched: l.tiles.count() as u64,
+            tiles_total: l.tiles.touched.len() as u64,
+            pixels_simulated: l.tiles.touched_pixels(&l.region),
+            screen_pixels: l.grid.pixels(),
+        },
+    )
+}
+
+/// Assembles the report and simulates the cycle model (reusing a cached simulation).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn build(
+    scene: &Scene,
+    hw: &HwConfig,
+    plan: &Plan,
+    steps: &[Step],
+    dac: &[u16],
+    dac_ref: &[u16],
+    ideal: &IdealImage,
+    cache: Option<&Cache>,
+) -> (Report, Workload, Vec<u8>) {
+    let (width, height) = (scene.image.width, scene.image.height);
+    let codes = compare::codes(dac, dac_ref, hw.gamma.dac_bits);
+    let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
+    let weber = compare::weber(dac, dac_ref, &display);
+    let contours = perceptual::contours(dac, dac_ref, ideal, &display);
+    let stages: Vec<StageReport> = steps.iter().map(|s| s.outcome.report.clone()).collect();
+    let overflows = stages
+        .iter()
+        .flat_map(|s| &s.signals)
+        .map(|s| s.overflows)
+        .sum();
+    let storage_bits = stages.iter().map(|s| s.cost.storage_bits).sum();
+    let lut_bits = stages.iter().map(|s| s.cost.lut_bits).sum();
+    let packed = steps
+        .iter()
+        .flat_map(|s| s.outcome.packs.iter().cloned())
+        .collect();
+    let workload = workload(plan, steps, &hw.cycles);
+    let simulate = || {
+        let t = Instant::now();
+        let r = cycles::simulate(&workload, None);
+        (r, t.elapsed().as_secs_f64())
+    };
+    let sim: Arc<(SimResult, f64)> = match cache {
+        Some(c) => c.sim(workload.key(), simulate).0,
+        None => Arc::new(simulate()),
+    };
+    let (sim, wall) = (&sim.0, sim.1);
+    let cycles = cycles::report(
+        &workload,
+        plan.order(),
+        hw.cycles.clock_mhz,
+        scene.display.refresh_hz,
+        cost::summarize(&stages, packed),
+        sim,
+        wall,
+    );
+    let timing = Timing {
+        host_ms: plan.host_ms,
+        fixed_ms: stages.iter().map(|s| s.fixed_ms).sum(),
+        float_ms: stages.iter().map(|s| s.float_ms).sum(),
+        local_ms: stages.iter().map(|s| s.local_ms).sum(),
+        threads: rayon::current_num_threads(),
+    };
+    let report = Report {
+        igemu_version: env!("CARGO_PKG_VERSION").into(),
+        scene: SceneInfo {
+            name: scene.name.clone(),
+            width,
+            height,
+            front_end: plan.host.stats.clone(),
+        },
+        hardware: hw.clone(),
+        plan: plan.report(scene, hw),
+        stages,
+        reused: steps
+            .iter()
+            .filter(|s| s.reused)
+            .map(|s| s.id.name().to_string())
+            .collect(),
+        end_to_end: EndToEnd { codes, weber },
+        overflows,
+        storage_bits,
+        lut_bits,
+        timing,
+        cycles,
+        contours: contours.report,
+    };
+    (report, workload, contours.map)
+}

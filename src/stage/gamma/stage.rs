@@ -1,0 +1,294 @@
+//! The gamma stage through the contract: the LUT the plan needs (plain; with `f` extra
+//! output fraction bits when a dither follows; with a reduced address when the dither runs
+//! before it; the eq. 15 LUT of a log-coded frame), its float reference and its
+//! stage-local comparison.
+
+use super::{GammaLut, GammaSpec, apply_powers, powers, powers_key};
+use crate::config::HwConfig;
+use crate::error::Result;
+use crate::scene::Scene;
+use crate::stage::dither::{extended_lut, reduced_lut};
+use crate::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut};
+use crate::stage::taps::{FrameCoding, PixelTap, PixelTapF, Taps};
+use crate::stage::{
+    Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, Stage, StageId, TokenKind, Tokens,
+    Unit, memo,
+};
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// Which LUT the plan uses.
+#[derive(Clone, Debug)]
+pub enum Lut {
+    /// Frame code to DAC code.
+    Plain(Arc<GammaLut>),
+    /// Frame code to DAC code with `f` fraction bits (`UQd.f`): a dither follows.
+    Extended(Arc<Vec<u32>>, u32),
+    /// Dithered address (`A - f` bits) to DAC code: the dither ran before.
+    Reduced(Arc<GammaLut>, u32),
+    /// Log frame code to DAC code (eq. 15).
+    Log(Arc<Vec<u16>>, Arc<LogAdder>),
+}
+
+/// The gamma stage.
+pub struct Gamma;
+
+fn frame_bits(hw: &HwConfig) -> (u32, u32) {
+    let f = hw.accumulate.frame.format;
+    (f.int_bits, f.frac_bits)
+}
+
+impl Stage for Gamma {
+    type Fixed = Lut;
+
+    fn id(&self) -> StageId {
+        StageId::Gamma
+    }
+
+    fn plan(&self, scene: &Scene, hw: &HwConfig) -> Result<Need> {
+        let g = hw.gamma.gamma.unwrap_or(scene.display.gamma);
+        Ok(Need::yes(if hw.gamma.correction {
+            format!(
+                "the frame drives a {}-bit DAC through a LUT correcting gamma {g}",
+                hw.gamma.dac_bits
+            )
+        } else {
+            format!(
+                "the frame drives a {}-bit DAC through a linear LUT (gamma.correction = false)",
+                hw.gamma.dac_bits
+            )
+        }))
+    }
+
+    fn key(&self, cx: &Cx) -> serde_json::Value {
+        // The dither's section matters only when the plan runs it (it shapes the LUT).
+        let dither = cx.layout.has(StageId::Dither);
+        serde_json::json!({
+            "gamma": cx.hw.section("gamma"),
+            "dither": dither.then(|| cx.hw.section("dither")),
+            "display_gamma": cx.scene.display.gamma,
+            "dof": cx.layout.has(StageId::Dof),
+        })
+    }
+
+    fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(Lut, Facts)> {
+        let hw = cx.hw;
+        let spec = GammaSpec::of(cx.scene, hw);
+        let (acc_bits, frac) = frame_bits(hw);
+        let dac_max = spec.dac.format.max_code() as u32;
+        let mut facts = Facts::default();
+        let dither_after = cx.layout.next(StageId::Gamma) == Some(StageId::Dither);
+        let dither_before = cx.layout.has(StageId::Dither) && !dither_after;
+        let (lut, codes, px_frac): (Lut, Vec<u32>, u32) = if dither_before {
+            let f = hw.dither.frac_bits;
+            let lut = reduced_lut(&spec, acc_bits, f);
+            let addr = &taps.fixed.pixels().codes;
+            let codes = addr
+                .par_iter()
+                .map(|&a| lut.table[a as usize] as u32)
+                .collect();
+            facts.note("monotone", lut.is_monotone());
+            (Lut::Reduced(Arc::new(lut), f), codes, 0)
+        } else {
+            let frame = taps.fixed.frame();
+            let acc = &frame.frame.acc;
+            match &frame.coding {
+                FrameCoding::Log(add) => {
+                    let lut = log_gamma_lut(add, &spec);
+                    let max = lut.len() - 1;
+                    let codes = acc
+                        .par_iter()
+                        .map(|&c| lut[(c as usize).min(max)] as u32)
+                        .collect();
+                    facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
+                    facts.note("log_input_eq15", true);
+                    (Lut::Log(Arc::new(lut), add.clone()), codes, 0)
+                }
+                FrameCoding::Linear if dither_after => {
+                    let f = hw.dither.frac_bits;
+                    let lut = extended_lut(&spec, acc_bits, f);
+                    let amax = lut.len() - 1;
+                    let codes = acc
+                        .par_iter()
+                        .map(|&a| lut[((a >> frac) as usize).min(amax)])
+                        .collect();
+                    facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
+                    facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
+                    (Lut::Extended(Arc::new(lut), f), codes, f)
+                }
+                FrameCoding::Linear => {
+                    let lut = GammaLut::build(&spec, acc_bits);
+                    let mut dac = vec![0u16; acc.len()];
+                    lut.apply(acc, frac, &mut dac);
+                    facts.note("monotone", lut.is_monotone());
+                    let unreachable = lut.unreachable_codes();
+                    facts.note("unreachable_dac_codes", unreachable.len() as u64);
+                    facts.note(
+                        "first_unreachable",
+                        unreachable.iter().take(16).collect::<Vec<_>>(),
+                    );
+                    (
+                        Lut::Plain(Arc::new(lut)),
+                        dac.into_iter().map(u32::from).collect(),
+                        0,
+                    )
+                }
+            }
+        };
+        let entries = match &lut {
+            Lut::Plain(l) | Lut::Reduced(l, _) => l.table.len(),
+            Lut::Extended(t, _) => t.len(),
+            Lut::Log(t, _) => t.len(),
+        };
+        facts.work = vec![
+            ("lookups", codes.len() as u64),
+            ("lut_entries", entries as u64),
+        ];
+        taps.fixed.pixels = Some(Arc::new(PixelTap {
+            codes,
+            frac: px_frac,
+            max: dac_max,
+        }));
+        Ok((lut, facts))
+    }
+
+    fn float(&self, cx: &Cx, lut: &Lut, taps: &mut Taps, _: &mut Notes) -> Result<()> {
+        let hw = cx.hw;
+        let spec = GammaSpec::of(cx.scene, hw);
+        let out = match lut {
+            Lut::Reduced(..) => {
+                let PixelTapF::Codes(addr) = taps.float.pixels() else {
+                    unreachable!("the dither writes addresses before the LUT")
+                };
+                let (acc_bits, _) = frame_bits(hw);
+                let white = ((1u64 << acc_bits) - 1) as f64;
+                let f = hw.dither.frac_bits;
+                PixelTapF::Codes(
+                    addr.par_iter()
+                        .map(|&a| spec.code((((a as u64) << f) as f64 / white).min(1.0)) as u32)
+                        .collect(),
+                )
+            }
+            _ => {
+                let frame_ref = taps.float.frame();
+                let p = memo(cx.memo, powers_key(cx.input_key, &spec), || {
+                    powers(frame_ref, hw, &spec)
+                });
+                if let Lut::Extended(..) = lut {
+                    PixelTapF::Values(p.par_iter().map(|&v| spec.scale(v)).collect())
+                } else {
+                    let mut dac = vec![0u16; p.len()];
+                    apply_powers(&spec, &p, &mut dac);
+                    PixelTapF::Codes(dac.into_iter().map(u32::from).collect())
+                }
+            }
+        };
+        taps.float.pixels = Some(Arc::new(out));
+        Ok(())
+    }
+
+    /// The float gamma curve of each input code against the LUT's entry for it, in output
+    /// LSBs (DAC codes, or DAC codes with `f` fraction bits for the extended LUT).
+    fn local(
+        &self,
+        cx: &Cx,
+        lut: &Lut,
+        input: &Taps,
+        out: &Taps,
+        _: &mut Notes,
+    ) -> Option<LocalError> {
+        let hw = cx.hw;
+        let spec = GammaSpec::of(cx.scene, hw);
+        let (acc_bits, frac) = frame_bits(hw);
+        let white = ((1u64 << acc_bits) - 1) as f64;
+        let codes = &out.fixed.pixels().codes;
+        let mut e = LocalError::default();
+        match lut {
+            Lut::Reduced(_, f) => {
+                for (&a, &c) in input.fixed.pixels().codes.iter().zip(codes) {
+                    e.add(
+                        c as f64,
+                        spec.ideal((((a as u64) << f) as f64 / white).min(1.0)),
+                    );
+                }
+            }
+            Lut::Log(_, add) => {
+                for (&c, &d) in input.fixed.frame().frame.acc.iter().zip(codes) {
+                    e.add(d as f64, spec.ideal(log_gamma_linear(add, c as i64)));
+                }
+            }
+            Lut::Extended(_, f) => {
+                for (&a, &v) in input.fixed.frame().frame.acc.iter().zip(codes) {
+                    let ideal = spec.ideal((a >> frac) as f64 / white);
+                    e.add(v as f64, ideal * (1u64 << f) as f64);
+                }
+            }
+            Lut::Plain(_) => {
+                for (&a, &d) in input.fixed.frame().frame.acc.iter().zip(codes) {
+                    e.add(d as f64, spec.ideal((a >> frac) as f64 / white));
+                }
+            }
+        }
+        Some(e.finish())
+    }
+
+    /// One token per binned tile (the pixels of the region in it); after depth of field,
+    /// one per screen row (the layers blur and composite over the whole screen).
+    fn tokens(&self, cx: &Cx, _: &Lut) -> Option<Tokens> {
+        let l = cx.layout;
+        let (kind, items) = if l.has(StageId::Dof) {
+            let (w, h) = (l.grid.width as u64, l.grid.height as u64);
+            (TokenKind::Row, vec![w; h as usize])
+        } else {
+            let t = &l.tiles;
+            (
+                TokenKind::Tile,
+                t.binned_in(&l.region).map(|(_, r)| r.pixels()).collect(),
+            )
+        };
+        Some(Tokens {
+            kind,
+            item: "pixels",
+            items,
+            port_bits: vec![],
+        })
+    }
+
+    fn cost(&self, cx: &Cx, lut: &Lut) -> Cost {
+        let dac_bits = cx.hw.gamma.dac_bits;
+        let (acc_bits, _) = frame_bits(cx.hw);
+        match lut {
+            Lut::Plain(l) => l.cost(ROM),
+            Lut::Reduced(l, _) => l.cost(ROM_REDUCED),
+            Lut::Extended(t, f) => Cost::new(
+                vec![Memory::rom(ROM_EXTENDED, t.len() as u64, dac_bits + f)],
+                vec![Unit::adder("LUT address", 1, acc_bits)],
+                vec![],
+            ),
+            Lut::Log(t, add) => Cost::new(
+                vec![Memory::rom(ROM_LOG, t.len() as u64, dac_bits)],
+                vec![Unit::adder("LUT address", 1, add.frame_bits())],
+                vec![],
+            ),
+        }
+    }
+
+    fn memories(&self, cx: &Cx, lut: &Lut, _: &Taps) -> Vec<MemImage> {
+        let dac_bits = cx.hw.gamma.dac_bits;
+        vec![match lut {
+            Lut::Plain(l) => MemImage::table(ROM, dac_bits, Arc::new(l.table.clone())),
+            Lut::Reduced(l, _) => MemImage::table(ROM_REDUCED, dac_bits, Arc::new(l.table.clone())),
+            Lut::Extended(t, f) => MemImage::table(ROM_EXTENDED, dac_bits + f, t.clone()),
+            Lut::Log(t, _) => MemImage::table(ROM_LOG, dac_bits, t.clone()),
+        }]
+    }
+}
+
+/// The plain gamma ROM.
+pub const ROM: &str = "gamma ROM";
+/// The gamma ROM with extra output fraction bits (a dither follows).
+pub const ROM_EXTENDED: &str = "gamma ROM (extended output)";
+/// The gamma ROM with a reduced address (the dither runs before).
+pub const ROM_REDUCED: &str = "gamma ROM (reduced address)";
+/// The eq. 15 gamma ROM of a log-coded frame.
+pub const ROM_LOG: &str = "gamma ROM (eq. 15, log input)";

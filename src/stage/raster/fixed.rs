@@ -1,0 +1,227 @@
+//! The fixed raster: Bresenham-style edge walking with add-only interpolation.
+//!
+//! Per sample row each active edge steps by quotient and remainder (see `setup`); per
+//! sample the intensity and depth interpolators add their column gradient. Nothing in
+//! the row or sample loops multiplies or divides. Spans that start left of the sample
+//! region (off-screen, inside the guard band) are walked by additions too and counted as
+//! `walked` samples; rows above the region likewise (`rows_walked`).
+
+use super::Frag;
+use crate::fixed::{Quant, round_shift_i64};
+use crate::stage::setup::{Edge, PointSetup, Setup, TriSetup};
+use crate::stage::{Grid, SampleRegion};
+
+/// Work of the raster.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RasterWork {
+    /// Spans with at least one sample in the region.
+    pub spans: u64,
+    /// Samples emitted.
+    pub samples: u64,
+    /// Samples stepped outside the region (guard band) to reach the region.
+    pub walked: u64,
+    /// Sample rows stepped above the region.
+    pub rows_walked: u64,
+    /// Interpolator re-seeds at a triangle's middle vertex (a setup operation).
+    pub reseeds: u64,
+    /// Interpolated values clamped into their format (rounding drift past a vertex value).
+    pub clamped: u64,
+}
+
+/// Fixed parameters of the raster.
+#[derive(Clone, Copy, Debug)]
+pub struct RasterParams {
+    /// Sample grid.
+    pub grid: Grid,
+    /// Interpolator guard bits.
+    pub guard: u32,
+    /// Rounding of interpolators to sample codes.
+    pub quant: Quant,
+    /// Largest intensity code.
+    pub i_max: i64,
+    /// Largest depth code.
+    pub z_max: i64,
+}
+
+#[inline]
+fn out_code(v: i64, p: &RasterParams, max: i64, clamped: &mut u64) -> u32 {
+    let c = round_shift_i64(v, p.guard, p.quant);
+    if c < 0 || c > max {
+        *clamped += 1;
+        c.clamp(0, max) as u32
+    } else {
+        c as u32
+    }
+}
+
+/// Left-edge attribute stepping: increments for a column move of `a` or `a + 1`.
+struct EdgeInterp {
+    inc_a_i: i64,
+    inc_a1_i: i64,
+    inc_a_z: i64,
+    inc_a1_z: i64,
+}
+
+impl EdgeInterp {
+    fn new(e: &Edge, di: (i64, i64), dz: (i64, i64)) -> Self {
+        // Setup-time products: the edge's integer step times the column gradient.
+        let inc_a_i = di.1 + e.a * di.0;
+        let inc_a_z = dz.1 + e.a * dz.0;
+        Self {
+            inc_a_i,
+            inc_a1_i: inc_a_i + di.0,
+            inc_a_z,
+            inc_a1_z: inc_a_z + dz.0,
+        }
+    }
+}
+
+/// Rasterises one set-up triangle into `out` (fragments inside `reg`, row by row).
+pub fn raster_tri(
+    t: &TriSetup,
+    p: &RasterParams,
+    reg: &SampleRegion,
+    out: &mut Vec<Frag>,
+    w: &mut RasterWork,
+) {
+    let g = &p.grid;
+    let h2 = 2 * g.h;
+    let (mut long, mut upper, mut lower) = (t.long, t.upper, t.lower);
+    let (k_start, k_end) = (long.k0, long.k1.min(reg.k1));
+    if k_start >= k_end {
+        return;
+    }
+    // Column and row gradients with guard bits (setup-time divisions).
+    let di = (t.i.dx(h2, p.guard), t.i.dy(h2, p.guard));
+    let dz = (t.z.dx(h2, p.guard), t.z.dy(h2, p.guard));
+    let x_of = |c: i64| (2 * c + 1) * g.h;
+    let y_of = |k: i64| (2 * k + 1) * g.h;
+    let mut in_upper = upper.k0 < upper.k1 && k_start < upper.k1;
+    let seed = |e: &Edge, k: i64| {
+        (
+            t.i.eval(x_of(e.q), y_of(k), p.guard),
+            t.z.eval(x_of(e.q), y_of(k), p.guard),
+        )
+    };
+    let first_left = if t.long_is_left {
+        long
+    } else if in_upper {
+        upper
+    } else {
+        lower
+    };
+    let (mut vi, mut vz) = seed(&first_left, k_start);
+    let mut interp = EdgeInterp::new(&first_left, di, dz);
+    let width = reg.width();
+    let mut k = k_start;
+    loop {
+        let short = if in_upper { &upper } else { &lower };
+        let (lq, rq) = if t.long_is_left {
+            (long.q, short.q)
+        } else {
+            (short.q, long.q)
+        };
+        if k >= reg.k0 {
+            let c_start = lq.max(reg.c0);
+            let c_end = rq.min(reg.c1);
+            if c_start < c_end {
+                w.spans += 1;
+                let (mut si, mut sz) = (vi, vz);
+                for _ in lq..c_start {
+                    si += di.0;
+                    sz += dz.0;
+                }
+                w.walked += (c_start - lq) as u64;
+                let row = (k - reg.k0) as usize * width;
+                for c in c_start..c_end {
+                    out.push(Frag {
+                        s: (row + (c - reg.c0) as usize) as u32,
+                        z: out_code(sz, p, p.z_max, &mut w.clamped),
+                        i: out_code(si, p, p.i_max, &mut w.clamped),
+                    });
+                    si += di.0;
+                    sz += dz.0;
+                }
+                w.samples += (c_end - c_start) as u64;
+            }
+        } else {
+            w.rows_walked += 1;
+        }
+        k += 1;
+        if k >= k_end {
+            break;
+        }
+        // Step the edges to the next row: adds and compares only.
+        let long_carry = long.step();
+        let switch = in_upper && k >= upper.k1;
+        let short_carry = if switch {
+            in_upper = false; // `lower` already sits on its first row, which is `k`
+            false
+        } else if in_upper {
+            upper.step()
+        } else {
+            lower.step()
+        };
+        if !t.long_is_left && switch {
+            // The left edge changes at the middle vertex: re-seed (a setup operation).
+            (vi, vz) = seed(&lower, k);
+            interp = EdgeInterp::new(&lower, di, dz);
+            w.reseeds += 1;
+        } else {
+            let c = if t.long_is_left {
+                long_carry
+            } else {
+                short_carry
+            };
+            vi += if c { interp.inc_a1_i } else { interp.inc_a_i };
+            vz += if c { interp.inc_a1_z } else { interp.inc_a_z };
+        }
+    }
+}
+
+/// Rasterises a light point's square (flat values) into `out`.
+pub fn raster_point(
+    pt: &PointSetup,
+    p: &RasterParams,
+    reg: &SampleRegion,
+    out: &mut Vec<Frag>,
+    w: &mut RasterWork,
+) {
+    let (c0, c1) = (pt.c.0.max(reg.c0), pt.c.1.min(reg.c1));
+    let (k0, k1) = (pt.k.0.max(reg.k0), pt.k.1.min(reg.k1));
+    if c0 >= c1 || k0 >= k1 {
+        return;
+    }
+    let z = pt.z.clamp(0, p.z_max) as u32;
+    let i = pt.i.clamp(0, p.i_max) as u32;
+    for k in k0..k1 {
+        w.spans += 1;
+        for c in c0..c1 {
+            out.push(Frag {
+                s: reg.index(c, k) as u32,
+                z,
+                i,
+            });
+        }
+    }
+    w.samples += ((c1 - c0) * (k1 - k0)) as u64;
+}
+
+/// Rasterises any set-up primitive.
+pub fn raster(
+    s: &Setup,
+    p: &RasterParams,
+    reg: &SampleRegion,
+    out: &mut Vec<Frag>,
+    w: &mut RasterWork,
+) {
+    match s {
+        Setup::Tri(t) => raster_tri(t, p, reg, out, w),
+        Setup::Line(a, b) => {
+            raster_tri(a, p, reg, out, w);
+            raster_tri(b, p, reg, out, w);
+        }
+        Setup::Point(pt) => raster_point(pt, p, reg, out, w),
+        Setup::Degenerate => {}
+    }
+}

@@ -1,0 +1,286 @@
+//! The taps: the signals between stages, fixed and float side by side. A stage reads the
+//! taps of its input and writes its own; every tap is shared (`Arc`), so the taps after a
+//! stage are cheap to keep (for per-stage comparison, dumps, test vectors) and a cached
+//! stage result costs nothing to reuse.
+//!
+//! | tap | written by | fixed | float reference |
+//! |---|---|---|---|
+//! | `host` | the plan (host front end, f64) | | |
+//! | `prims` | input | quantised primitives, background code | host primitives in the fixed units |
+//! | `setups` | setup | edge and plane constants | (none: the float raster reads the primitives) |
+//! | `frags` | raster | covered samples per primitive | the same from the float raster |
+//! | `samples` | visibility, logdomain | resolved sample buffer, visible light-point samples | the same in f64 |
+//! | `frame` | accumulate, dof | frame memory (codes, depth, coverage) and its coding | frame intensity in frame LSBs |
+//! | `pixels` | gamma, dither | codes with `frac` fraction bits (the DAC codes at the end) | real values or codes |
+
+use super::accumulate::{Frame, PointFrags};
+use super::input::QPrim;
+use super::logdomain::{LogAdder, LogCode};
+use super::raster::{FPrim, Frag, FragF};
+use super::setup::Setup;
+use super::visibility::{Samples, SamplesF};
+use crate::scene::HostScene;
+use std::sync::Arc;
+
+/// Every tap after a stage.
+#[derive(Clone, Default)]
+pub struct Taps {
+    /// The host's screen-space primitives (f64).
+    pub host: Option<Arc<HostScene>>,
+    /// The fixed-point model's taps.
+    pub fixed: FixedTaps,
+    /// The float reference's taps.
+    pub float: FloatTaps,
+}
+
+/// Taps of the fixed-point model.
+#[derive(Clone, Default)]
+pub struct FixedTaps {
+    /// Quantised primitives (input).
+    pub prims: Option<Arc<Prims>>,
+    /// Per-primitive setup (setup).
+    pub setups: Option<Arc<Vec<Setup>>>,
+    /// Covered samples per primitive (raster).
+    pub frags: Option<Arc<Frags<Frag>>>,
+    /// The sample buffer (visibility; logdomain re-codes it).
+    pub samples: Option<Arc<SampleTap>>,
+    /// The frame memory (accumulate; dof replaces its codes).
+    pub frame: Option<Arc<FrameTap>>,
+    /// Pixel codes after the gamma LUT or the dither.
+    pub pixels: Option<Arc<PixelTap>>,
+}
+
+/// Taps of the float reference.
+#[derive(Clone, Default)]
+pub struct FloatTaps {
+    /// Host primitives in the fixed formats' units, unrounded.
+    pub prims: Option<Arc<PrimsF>>,
+    /// Covered samples per primitive.
+    pub frags: Option<Arc<Frags<FragF>>>,
+    /// The sample buffer.
+    pub samples: Option<Arc<SampleTapF>>,
+    /// Frame intensity in frame LSBs.
+    pub frame: Option<Arc<Vec<f64>>>,
+    /// Pixel values after the gamma curve or the dither.
+    pub pixels: Option<Arc<PixelTapF>>,
+}
+
+fn need<'a, T>(t: &'a Option<Arc<T>>, what: &str) -> &'a T {
+    t.as_deref()
+        .unwrap_or_else(|| panic!("plan error: no {what} tap (a stage runs before its input)"))
+}
+
+impl Taps {
+    /// The host scene.
+    pub fn host(&self) -> &HostScene {
+        need(&self.host, "host")
+    }
+}
+
+impl FixedTaps {
+    /// The quantised primitives.
+    pub fn prims(&self) -> &Prims {
+        need(&self.prims, "fixed prims")
+    }
+    /// The setups.
+    pub fn setups(&self) -> &[Setup] {
+        need(&self.setups, "setups").as_slice()
+    }
+    /// The fragments.
+    pub fn frags(&self) -> &Frags<Frag> {
+        need(&self.frags, "fixed frags")
+    }
+    /// The sample buffer.
+    pub fn samples(&self) -> &SampleTap {
+        need(&self.samples, "fixed samples")
+    }
+    /// The frame memory.
+    pub fn frame(&self) -> &FrameTap {
+        need(&self.frame, "fixed frame")
+    }
+    /// The pixel codes.
+    pub fn pixels(&self) -> &PixelTap {
+        need(&self.pixels, "fixed pixels")
+    }
+}
+
+impl FloatTaps {
+    /// The float primitives.
+    pub fn prims(&self) -> &PrimsF {
+        need(&self.prims, "float prims")
+    }
+    /// The float fragments.
+    pub fn frags(&self) -> &Frags<FragF> {
+        need(&self.frags, "float frags")
+    }
+    /// The float sample buffer.
+    pub fn samples(&self) -> &SampleTapF {
+        need(&self.samples, "float samples")
+    }
+    /// The float frame.
+    pub fn frame(&self) -> &[f64] {
+        need(&self.frame, "float frame").as_slice()
+    }
+    /// The float pixels.
+    pub fn pixels(&self) -> &PixelTapF {
+        need(&self.pixels, "float pixels")
+    }
+}
+
+/// The quantised primitives and the background's intensity code.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prims {
+    /// Primitives in scene order.
+    pub q: Vec<QPrim>,
+    /// Background intensity code (quantised like a vertex intensity).
+    pub bg: u32,
+}
+
+/// The float reference's primitives and background.
+#[derive(Clone, Debug)]
+pub struct PrimsF {
+    /// Primitives in scene order, in the fixed formats' units.
+    pub f: Vec<FPrim>,
+    /// Background intensity (intensity LSBs).
+    pub bg: f64,
+}
+
+/// The order the geometry stages process primitives in: surfaces in scene order, then light
+/// points (they are added to the frame after every surface is resolved).
+pub fn processing_order(is_point: impl Fn(usize) -> bool, n: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).filter(|&i| !is_point(i)).collect();
+    order.extend((0..n).filter(|&i| is_point(i)));
+    order
+}
+
+/// Per-primitive fragment lists (primitive `p`'s are `data[start[p]..start[p + 1]]`), in the
+/// order the raster emitted them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Frags<T> {
+    /// All fragments.
+    pub data: Vec<T>,
+    /// Offsets, one per primitive plus one.
+    pub start: Vec<usize>,
+}
+
+impl<T> Frags<T> {
+    /// Primitive `p`'s fragments.
+    pub fn of(&self, p: usize) -> &[T] {
+        &self.data[self.start[p]..self.start[p + 1]]
+    }
+}
+
+/// How the sample buffer codes intensity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SampleCoding {
+    /// Linear intensity codes.
+    Linear,
+    /// Log codes (structure b: the accumulate stage adds them in the log domain).
+    Log(LogCode),
+}
+
+/// The fixed sample buffer.
+#[derive(Clone, Debug)]
+pub struct SampleTap {
+    /// Resolved samples (depth, intensity, primitive id).
+    pub samples: Samples,
+    /// Light points: intensity code and visible samples.
+    pub points: Vec<PointFrags<u32>>,
+    /// Background intensity code (what an empty sample holds).
+    pub bg: u32,
+    /// Intensity coding.
+    pub coding: SampleCoding,
+}
+
+/// The float sample buffer.
+#[derive(Clone, Debug)]
+pub struct SampleTapF {
+    /// Resolved samples.
+    pub samples: SamplesF,
+    /// Light points.
+    pub points: Vec<PointFrags<f64>>,
+    /// Background intensity.
+    pub bg: f64,
+}
+
+/// How the frame memory codes intensity.
+#[derive(Clone, Debug)]
+pub enum FrameCoding {
+    /// Linear codes of the `accumulate.frame` format.
+    Linear,
+    /// Log codes of the Gaussian-log adder (structure b).
+    Log(Arc<LogAdder>),
+}
+
+/// The fixed frame memory.
+#[derive(Clone, Debug)]
+pub struct FrameTap {
+    /// Codes, nearest depth and coverage per pixel.
+    pub frame: Frame,
+    /// Coding of the codes.
+    pub coding: FrameCoding,
+}
+
+/// Pixel codes with `frac` fraction bits in `0..=max` (after the gamma LUT or the dither).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PixelTap {
+    /// Codes, row-major over the screen.
+    pub codes: Vec<u32>,
+    /// Fraction bits (0: integer codes, e.g. the DAC codes).
+    pub frac: u32,
+    /// Largest code.
+    pub max: u32,
+}
+
+/// Float pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PixelTapF {
+    /// Real values in output LSBs (before a dither quantises them).
+    Values(Vec<f64>),
+    /// Integer codes.
+    Codes(Vec<u32>),
+}
+
+/// The pixel planes a stage's output taps hold, for dumps: the frame memory's codes, depth
+/// and coverage after accumulate and dof, the pixel codes after gamma and dither.
+pub fn image_planes(id: crate::stage_id::StageId) -> &'static [&'static str] {
+    use crate::stage_id::StageId;
+    match id {
+        StageId::Accumulate | StageId::Dof => &["frame", "depth", "coverage"],
+        StageId::Gamma | StageId::Dither => &["codes"],
+        _ => &[],
+    }
+}
+
+impl Taps {
+    /// A pixel plane of the taps as codes (one per screen pixel): `frame` (frame codes),
+    /// `depth` (the nearest depth code's top 16 of 24 bits, 65535 for the background only),
+    /// `coverage` (covered samples), `codes` (the pixel codes).
+    pub fn image(&self, plane: &str) -> Option<Vec<u32>> {
+        match plane {
+            "frame" => Some(self.fixed.frame.as_ref()?.frame.acc.clone()),
+            "depth" => Some(
+                self.fixed
+                    .frame
+                    .as_ref()?
+                    .frame
+                    .depth
+                    .iter()
+                    .map(|&z| if z == u32::MAX { 65535 } else { z >> 8 })
+                    .collect(),
+            ),
+            "coverage" => Some(
+                self.fixed
+                    .frame
+                    .as_ref()?
+                    .frame
+                    .coverage
+                    .iter()
+                    .map(|&c| c as u32)
+                    .collect(),
+            ),
+            "codes" => Some(self.fixed.pixels.as_ref()?.codes.clone()),
+            _ => None,
+        }
+    }
+}
