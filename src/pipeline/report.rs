@@ -103,16 +103,16 @@ pub fn gamma_spec(scene: &Scene, hw: &HwConfig) -> GammaSpec {
     )
 }
 
-/// The ideal image of the frame the gamma stage reads (the float frame after the last stage
-/// before gamma), memoised in `cache`.
+/// The ideal image of the frame the gamma curve reads, memoised in `cache`.
 pub(super) fn ideal(scene: &Scene, hw: &HwConfig, steps: &[Step], cache: Option<&Cache>) -> Ideal {
     let spec = gamma_spec(scene, hw);
+    // The last stage before the first that writes pixels (the gamma LUT, or a dither placed
+    // before it): its float frame is what the gamma curve reads.
     let before = steps
         .iter()
-        .take_while(|s| s.id != StageId::Gamma)
-        .filter(|s| s.outcome.taps.float.frame.is_some())
+        .take_while(|s| s.outcome.taps.float.pixels.is_none())
         .last()
-        .expect("a frame stage runs before gamma");
+        .expect("a frame stage runs before the pixels are written");
     let frame_ref = before.outcome.taps.float.frame();
     let m: &dyn crate::stage::Memo = match cache {
         Some(c) => c,

@@ -1,0 +1,397 @@
+//! Scene file parsing and validation.
+//!
+//! serde reads the file into flat "raw" structs with `deny_unknown_fields` (unknown keys and
+//! wrong types come back with line and column); every value is then validated by hand and
+//! errors are located by dotted field path (`object[2].radius`) through [`TomlFile::error`].
+//! Objects are one flat struct with every possible field, so an unknown `kind` and a field
+//! that does not belong to its kind get their own precise messages.
+
+use super::vec3::{cross, norm, normalize, sub};
+use super::{Camera, Display, ImageSpec, Lens, Light, MAX_RESOLUTION, Scene, Shading};
+use crate::error::FileError;
+use crate::files::TomlFile;
+use serde::Deserialize;
+
+mod objects;
+
+use objects::{RawObject, object};
+
+type R<T> = Result<T, FileError>;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    name: Option<String>,
+    image: RawImage,
+    camera: RawCamera,
+    display: Option<RawDisplay>,
+    shading: Option<RawShading>,
+    #[serde(default)]
+    light: Vec<RawLight>,
+    #[serde(default)]
+    object: Vec<RawObject>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawImage {
+    width: i64,
+    height: i64,
+    background: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    position: [f64; 3],
+    look_at: [f64; 3],
+    up: Option<[f64; 3]>,
+    fov_y_deg: Option<f64>,
+    near: f64,
+    far: f64,
+    lens: Option<RawLens>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLens {
+    kind: Option<String>,
+    focal_length: Option<f64>,
+    f_number: Option<f64>,
+    lens_radius: Option<f64>,
+    focus_distance: Option<f64>,
+    deep: Option<f64>,
+    coc: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDisplay {
+    contrast: Option<f64>,
+    gamma: Option<f64>,
+    weber: Option<f64>,
+    b_max: Option<f64>,
+    refresh_hz: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawShading {
+    ambient: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLight {
+    direction: [f64; 3],
+    intensity: Option<f64>,
+}
+
+/// An allowed range of a real number.
+#[derive(Clone, Copy)]
+enum Range {
+    Any,
+    Gt(f64),
+    Ge(f64),
+    /// `(lo, hi)`
+    Open(f64, f64),
+    /// `[lo, hi]`
+    Closed(f64, f64),
+    /// `(lo, hi]`
+    LeftOpen(f64, f64),
+}
+
+impl Range {
+    fn contains(self, x: f64) -> bool {
+        x.is_finite()
+            && match self {
+                Range::Any => true,
+                Range::Gt(a) => x > a,
+                Range::Ge(a) => x >= a,
+                Range::Open(a, b) => x > a && x < b,
+                Range::Closed(a, b) => x >= a && x <= b,
+                Range::LeftOpen(a, b) => x > a && x <= b,
+            }
+    }
+
+    fn describe(self) -> String {
+        match self {
+            Range::Any => "a finite number".into(),
+            Range::Gt(a) => format!("a finite number > {a}"),
+            Range::Ge(a) => format!("a finite number >= {a}"),
+            Range::Open(a, b) => format!("a finite number in ({a}, {b})"),
+            Range::Closed(a, b) => format!("a finite number in [{a}, {b}]"),
+            Range::LeftOpen(a, b) => format!("a finite number in ({a}, {b}]"),
+        }
+    }
+}
+
+/// Validation context: the file, for locating errors.
+struct Ctx<'a> {
+    file: &'a TomlFile,
+}
+
+impl Ctx<'_> {
+    fn err(&self, path: &str, msg: impl Into<String>) -> FileError {
+        self.file.error(path, msg)
+    }
+
+    fn num(&self, path: &str, x: f64, range: Range) -> R<f64> {
+        if range.contains(x) {
+            Ok(x)
+        } else {
+            Err(self.err(path, format!("must be {}, got {x}", range.describe())))
+        }
+    }
+
+    fn opt(&self, path: &str, x: Option<f64>, default: f64, range: Range) -> R<f64> {
+        match x {
+            Some(x) => self.num(path, x, range),
+            None => Ok(default),
+        }
+    }
+
+    fn vec3(&self, path: &str, v: [f64; 3]) -> R<[f64; 3]> {
+        for (k, c) in v.iter().enumerate() {
+            self.num(&format!("{path}[{k}]"), *c, Range::Any)?;
+        }
+        Ok(v)
+    }
+
+    /// A finite, non-zero direction, normalised.
+    fn direction(&self, path: &str, v: [f64; 3]) -> R<[f64; 3]> {
+        self.vec3(path, v)?;
+        let n = norm(v);
+        if n > 0.0 && n.is_finite() {
+            Ok(normalize(v))
+        } else {
+            Err(self.err(path, format!("must be a non-zero vector, got {v:?}")))
+        }
+    }
+
+    /// A finite, non-zero vector kept at its length (cone and cylinder axes).
+    fn nonzero(&self, path: &str, v: [f64; 3]) -> R<[f64; 3]> {
+        self.direction(path, v)?;
+        Ok(v)
+    }
+
+    fn int(&self, path: &str, x: i64, lo: u32, hi: u32) -> R<u32> {
+        if x >= i64::from(lo) && x <= i64::from(hi) {
+            Ok(x as u32)
+        } else {
+            Err(self.err(path, format!("must be an integer in {lo}..={hi}, got {x}")))
+        }
+    }
+
+    fn required<T>(&self, path: &str, field: &str, x: Option<T>, what: &str) -> R<T> {
+        x.ok_or_else(|| self.err(path, format!("missing field `{field}` ({what})")))
+    }
+}
+
+pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
+    let raw: RawScene = file.parse()?;
+    let c = Ctx { file };
+    let name = raw.name.unwrap_or_else(|| stem(&file.name));
+    let image = image(&c, &raw.image)?;
+    let camera = camera(&c, &raw.camera)?;
+    let display = display(&c, raw.display.as_ref())?;
+    let shading = match raw.shading {
+        Some(s) => Shading {
+            ambient: c.opt("shading.ambient", s.ambient, 0.1, Range::Closed(0.0, 1.0))?,
+        },
+        None => Shading::default(),
+    };
+    let lights = raw
+        .light
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            Ok(Light {
+                direction: c.direction(&format!("light[{k}].direction"), l.direction)?,
+                intensity: c.opt(
+                    &format!("light[{k}].intensity"),
+                    l.intensity,
+                    1.0,
+                    Range::Ge(0.0),
+                )?,
+            })
+        })
+        .collect::<R<Vec<_>>>()?;
+    let objects = raw
+        .object
+        .iter()
+        .enumerate()
+        .map(|(k, o)| object(&c, &format!("object[{k}]"), o))
+        .collect::<R<Vec<_>>>()?;
+    Ok(Scene {
+        name,
+        image,
+        camera,
+        display,
+        shading,
+        lights,
+        objects,
+    })
+}
+
+/// `dir/name.toml` -> `name`.
+fn stem(name: &str) -> String {
+    let base = name.rsplit(['/', '\\']).next().unwrap_or(name);
+    base.strip_suffix(".toml").unwrap_or(base).to_string()
+}
+
+fn image(c: &Ctx, r: &RawImage) -> R<ImageSpec> {
+    Ok(ImageSpec {
+        width: c.int("image.width", r.width, 1, MAX_RESOLUTION)?,
+        height: c.int("image.height", r.height, 1, MAX_RESOLUTION)?,
+        background: c.opt(
+            "image.background",
+            r.background,
+            0.0,
+            Range::Closed(0.0, 1.0),
+        )?,
+    })
+}
+
+fn camera(c: &Ctx, r: &RawCamera) -> R<Camera> {
+    let position = c.vec3("camera.position", r.position)?;
+    let look_at = c.vec3("camera.look_at", r.look_at)?;
+    let view = sub(look_at, position);
+    if norm(view) == 0.0 {
+        return Err(c.err("camera.look_at", "must differ from camera.position"));
+    }
+    let up = c.direction("camera.up", r.up.unwrap_or([0.0, 1.0, 0.0]))?;
+    // sin of the angle between up and the view direction.
+    if norm(cross(normalize(view), up)) < 1e-6 {
+        return Err(c.err(
+            "camera.up",
+            format!("must not be parallel to the view direction (look_at - position = {view:?})"),
+        ));
+    }
+    let fov_y_deg = c.opt(
+        "camera.fov_y_deg",
+        r.fov_y_deg,
+        45.0,
+        Range::Open(0.0, 180.0),
+    )?;
+    let near = c.num("camera.near", r.near, Range::Gt(0.0))?;
+    let far = c.num("camera.far", r.far, Range::Any)?;
+    if far <= near {
+        return Err(c.err(
+            "camera.far",
+            format!("must be a finite number > camera.near = {near}, got {far}"),
+        ));
+    }
+    let lens = match &r.lens {
+        None => Lens::Pinhole,
+        Some(l) => lens(c, l)?,
+    };
+    Ok(Camera {
+        position,
+        look_at,
+        up,
+        fov_y_deg,
+        near,
+        far,
+        lens,
+    })
+}
+
+fn lens(c: &Ctx, r: &RawLens) -> R<Lens> {
+    let kind = c.required(
+        "camera.lens",
+        "kind",
+        r.kind.as_deref(),
+        "\"pinhole\" or \"thin_lens\"",
+    )?;
+    match kind {
+        "pinhole" => {
+            let extra = [
+                ("focal_length", r.focal_length.is_some()),
+                ("f_number", r.f_number.is_some()),
+                ("lens_radius", r.lens_radius.is_some()),
+                ("focus_distance", r.focus_distance.is_some()),
+                ("deep", r.deep.is_some()),
+                ("coc", r.coc.is_some()),
+            ];
+            if let Some((f, _)) = extra.iter().find(|(_, p)| *p) {
+                return Err(c.err(
+                    &format!("camera.lens.{f}"),
+                    "does not apply to kind = \"pinhole\" (use kind = \"thin_lens\")",
+                ));
+            }
+            Ok(Lens::Pinhole)
+        }
+        "thin_lens" => {
+            let what = "a finite number > 0, scene units";
+            let f = c.required("camera.lens", "focal_length", r.focal_length, what)?;
+            let focal_length = c.num("camera.lens.focal_length", f, Range::Gt(0.0))?;
+            let lens_radius = match (r.f_number, r.lens_radius) {
+                (Some(_), Some(_)) => {
+                    return Err(c.err(
+                        "camera.lens.lens_radius",
+                        "give either f_number or lens_radius, not both (lens_radius = focal_length / (2 f_number))",
+                    ));
+                }
+                (Some(n), None) => {
+                    focal_length / (2.0 * c.num("camera.lens.f_number", n, Range::Gt(0.0))?)
+                }
+                (None, Some(rad)) => c.num("camera.lens.lens_radius", rad, Range::Gt(0.0))?,
+                (None, None) => {
+                    return Err(c.err(
+                        "camera.lens",
+                        "missing field `f_number` or `lens_radius` (one of them, a finite number > 0)",
+                    ));
+                }
+            };
+            let d = c.required(
+                "camera.lens",
+                "focus_distance",
+                r.focus_distance,
+                "a finite number > focal_length",
+            )?;
+            let focus_distance = c.num("camera.lens.focus_distance", d, Range::Any)?;
+            if focus_distance <= focal_length {
+                return Err(c.err(
+                    "camera.lens.focus_distance",
+                    format!("must be a finite number > focal_length = {focal_length}, got {focus_distance}"),
+                ));
+            }
+            let deep = c.opt("camera.lens.deep", r.deep, 0.0, Range::Ge(0.0))?;
+            let coc = c.opt(
+                "camera.lens.coc",
+                r.coc,
+                Lens::default_coc(focal_length),
+                Range::Gt(0.0),
+            )?;
+            Ok(Lens::ThinLens {
+                focal_length,
+                lens_radius,
+                focus_distance,
+                deep,
+                coc,
+            })
+        }
+        other => Err(c.err(
+            "camera.lens.kind",
+            format!("unknown lens kind \"{other}\"; allowed: \"pinhole\", \"thin_lens\""),
+        )),
+    }
+}
+
+fn display(c: &Ctx, r: Option<&RawDisplay>) -> R<Display> {
+    let d = Display::default();
+    let Some(r) = r else { return Ok(d) };
+    Ok(Display {
+        contrast: c.opt("display.contrast", r.contrast, d.contrast, Range::Gt(1.0))?,
+        gamma: c.opt("display.gamma", r.gamma, d.gamma, Range::LeftOpen(1.0, 5.0))?,
+        weber: c.opt("display.weber", r.weber, d.weber, Range::Open(0.0, 1.0))?,
+        b_max: c.opt("display.b_max", r.b_max, d.b_max, Range::Gt(0.0))?,
+        refresh_hz: c.opt(
+            "display.refresh_hz",
+            r.refresh_hz,
+            d.refresh_hz,
+            Range::Gt(0.0),
+        )?,
+    })
+}
