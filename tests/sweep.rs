@@ -431,3 +431,63 @@ fn ranges_cli_reports_signals_and_exports_typedefs() {
         Some(2)
     );
 }
+
+/// Runs a grid on one scene through `sweep::run` with a fresh cache; returns the rows.
+fn reuse_rows(name: &str, scene: &igemu::scene::Scene, grid: &str) -> Vec<sweep::Row> {
+    let d = tmp(name);
+    let f = TomlFile::from_text("g.toml", grid);
+    let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
+    let cache = igemu::pipeline::Cache::new();
+    let out = d.join("out.jsonl").to_string_lossy().into_owned();
+    let opts = sweep::SweepOptions {
+        out: &out,
+        resume: false,
+        shard: None,
+        jobs: 1,
+        cache: Some(&cache),
+        flicker: None,
+    };
+    sweep::run(&configs, std::slice::from_ref(scene), &opts, &|_, _| {})
+        .unwrap()
+        .rows
+}
+
+#[test]
+fn a_dof_sweep_reuses_every_stage_before_dof() {
+    let scene = igemu::scene::Scene::default_scene();
+    let rows = reuse_rows("dof", &scene, "dof.guard_bits = [2, 3, 4]\n");
+    assert_eq!(rows.len(), 3);
+    assert!(rows[0].reused.is_empty(), "{:?}", rows[0].reused);
+    let before: Vec<String> = igemu::stage::StageId::ALL
+        .iter()
+        .take_while(|&&s| s != igemu::stage::StageId::Dof)
+        .filter(|&&s| s != igemu::stage::StageId::Logdomain)
+        .map(|s| s.name().to_string())
+        .collect();
+    for r in &rows[1..] {
+        assert_eq!(r.reused, before, "row {}", r.index);
+    }
+    // The guard bits change the blurred frame, so dof really ran on every row.
+    assert_ne!(rows[0].error, rows[2].error);
+}
+
+#[test]
+fn a_timing_sweep_reuses_every_stage_and_reruns_only_the_cycle_model() {
+    let d = tmp("timing-scene");
+    let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
+    let rows = reuse_rows(
+        "timing",
+        &scene,
+        "cycles.accumulate.lanes = [4, 16]\ncycles.raster.fifo = [1, 64]\n",
+    );
+    assert_eq!(rows.len(), 4);
+    let planned = ["input", "setup", "raster", "visibility", "accumulate", "gamma"];
+    assert!(rows[0].reused.is_empty());
+    for r in &rows[1..] {
+        assert_eq!(r.reused, planned, "row {}", r.index);
+        // Same images: the timing never changes a code.
+        assert_eq!(r.error, rows[0].error);
+    }
+    // The cycle model ran for each timing: four lanes are slower than sixteen.
+    assert!(rows[0].cycles.total_cycles > rows[2].cycles.total_cycles);
+}
