@@ -4,8 +4,9 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use igemu::config::{DitherCfg, DitherKind};
 use igemu::fixed::Quant;
-use igemu::stage::dither::{Dither, extended_lut};
+use igemu::stage::dither::Dither;
 use igemu::stage::gamma::GammaSpec;
+use igemu::stage::gamma::extended_lut;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

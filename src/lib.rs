@@ -1,11 +1,16 @@
 //! # igemu: an emulator of fixed-point image-generator hardware
 //!
-//! The pipeline is a stage graph (`scene -> input -> setup -> raster -> visibility ->
-//! accumulate -> gamma -> DAC`). Rules every stage follows:
+//! The pipeline is a stage graph: `scene -> (host front end, f64) -> input -> setup ->
+//! raster -> visibility -> [logdomain] -> accumulate -> [dof] -> gamma -> [dither] -> DAC`,
+//! the bracketed stages only when the scene and hardware need them. A plan
+//! ([`pipeline::plan`]) decides, before anything runs, which stages run and why, the screen
+//! region and the tiles; the runner executes it through the stage contract
+//! ([`stage::Stage`]) and reuses every stage whose inputs did not change
+//! ([`pipeline::cache`]). Rules every stage follows:
 //!
 //! 1. A stage has a fixed-point model (integers only), a float reference (f64, same
-//!    algorithm, ideal arithmetic), work counts for the cycle model and a cost model,
-//!    side by side in one module under [`stage`].
+//!    algorithm, ideal arithmetic), its stage-local comparison, the tokens of the cycle
+//!    model and a cost model, side by side in one module under [`stage`].
 //! 2. Every quantisation point names its format and its rounding and overflow modes
 //!    ([`fixed`]); overflow is never silent: it follows the configured mode and is counted.
 //! 3. The inner loops of rasterisation use additions and comparisons only; multiplications
@@ -14,7 +19,8 @@
 //! 5. Results are deterministic: bit-identical on any thread count and any run.
 //! 6. Only what the scene needs is modelled: stages, screen region and work.
 //!
-//! The library prints nothing; the `igemu` binary does.
+//! The library prints nothing; the `igemu` binary does. Modules depend on each other in one
+//! direction only (docs/STRUCTURE.md).
 
 pub mod analysis;
 pub mod compare;

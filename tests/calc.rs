@@ -1,4 +1,4 @@
-//! Every number of REFERENCE.md §6, to the printed precision, plus error cases.
+//! Every number of docs/reference.md §6, to the printed precision, plus error cases.
 
 use igemu::analysis::calc::{
     brightness_error_uncorrected, circle_of_confusion, depth_of_field, gaussian_half_size_factor,

@@ -316,7 +316,7 @@ fn flicker_metrics_are_the_flicker_sweeps_worst_object_and_only_when_asked() {
         assert_eq!(m.displayed_ripple_pct, worst);
         assert!(direct.objects.iter().any(|o| o.object == m.worst_object));
     }
-    // The box filter flickers more than the tent filter (REFERENCE: equal-energy filtering).
+    // The box filter flickers more than the tent filter (docs/reference.md §1: equal-energy filtering).
     assert!(
         rows[0].flicker.as_ref().unwrap().displayed_ripple_pct
             > rows[1].flicker.as_ref().unwrap().displayed_ripple_pct
@@ -481,7 +481,14 @@ fn a_timing_sweep_reuses_every_stage_and_reruns_only_the_cycle_model() {
         "cycles.accumulate.lanes = [4, 16]\ncycles.raster.fifo = [1, 64]\n",
     );
     assert_eq!(rows.len(), 4);
-    let planned = ["input", "setup", "raster", "visibility", "accumulate", "gamma"];
+    let planned = [
+        "input",
+        "setup",
+        "raster",
+        "visibility",
+        "accumulate",
+        "gamma",
+    ];
     assert!(rows[0].reused.is_empty());
     for r in &rows[1..] {
         assert_eq!(r.reused, planned, "row {}", r.index);

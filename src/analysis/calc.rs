@@ -1,4 +1,4 @@
-//! Analytic calculators from the source papers (REFERENCE.md §1, §2, §6): code widths for
+//! Analytic calculators from the source papers (docs/reference.md §1, §2, §6): code widths for
 //! intensity, DAC and log coding; thin-lens depth of field and circle of confusion; the
 //! Gaussian mask size factor; the brightness error of an uncorrected CRT.
 
@@ -42,7 +42,7 @@ pub struct Widths {
     pub linear8_max_contrast: f64,
 }
 
-/// Computes the code widths of REFERENCE.md §1 (eq. 9, 10, 11).
+/// Computes the code widths of docs/reference.md §1 (eq. 9, 10, 11).
 ///
 /// Requires `contrast > 1`, `0 < weber < 1` and `gamma > 1` (eq. 10 takes
 /// `(gamma - 1)^(1 - 1/gamma)`, undefined for gamma < 1 and degenerate at 1), all finite.
@@ -77,7 +77,7 @@ pub fn widths(contrast: f64, weber: f64, gamma: f64) -> Result<Widths, String> {
     })
 }
 
-/// Thin-lens depth of field (REFERENCE.md §2b). All lengths in the same unit (mm).
+/// Thin-lens depth of field (docs/reference.md §2b). All lengths in the same unit (mm).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct DepthOfField {
     /// f-number N.
@@ -152,14 +152,14 @@ pub fn depth_of_field(
 }
 
 /// Circle of confusion of a point at `distance` L with the lens focused at `focus` U:
-/// `C = F² / (U - F) · |L - U| / (N·L)` (REFERENCE.md §2b, eq. 3 and 7). Same length unit for
+/// `C = F² / (U - F) · |L - U| / (N·L)` (docs/reference.md §2b, eq. 3 and 7). Same length unit for
 /// all; no validation (U = F or L = 0 give infinities).
 pub fn circle_of_confusion(focal: f64, f_number: f64, focus: f64, distance: f64) -> f64 {
     focal * focal / (focus - focal) * (distance - focus).abs() / (f_number * distance)
 }
 
 /// Gaussian mask half-size factor `sqrt(-ln k)`: the (2M+1)² mask is cut where edge/centre
-/// is below `k`, so `M >= factor·|σ|` (REFERENCE.md §2a, eq. 4); 1.731 for k = 0.05.
+/// is below `k`, so `M >= factor·|σ|` (docs/reference.md §2a, eq. 4); 1.731 for k = 0.05.
 /// NaN unless `0 < k <= 1`.
 pub fn gaussian_half_size_factor(k: f64) -> f64 {
     (-k.ln()).sqrt()

@@ -4,7 +4,7 @@
 //! the camera (pinhole or thin lens), the display, the lights and the objects. [`front_end`]
 //! turns it into screen-space [`Primitive`]s with per-vertex linear intensity: it tessellates
 //! the canonical objects, culls back faces of closed ones, shades vertices (Lambert +
-//! Blinn-Phong, REFERENCE §5), clips against the near and far planes in view space, projects,
+//! Blinn-Phong, docs/reference.md §5), clips against the near and far planes in view space, projects,
 //! and clips against the guard band in screen space. The fixed-point pipeline quantises the
 //! result.
 //!
@@ -119,7 +119,7 @@ impl Default for Display {
 pub enum Lens {
     /// Everything in focus.
     Pinhole,
-    /// Thin lens (REFERENCE §2). All lengths in scene units.
+    /// Thin lens (docs/reference.md §2). All lengths in scene units.
     ThinLens {
         /// Focal length F, > 0.
         focal_length: f64,

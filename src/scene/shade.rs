@@ -1,4 +1,4 @@
-//! Per-vertex shading in f64 (REFERENCE §5): Lambert plus Blinn-Phong.
+//! Per-vertex shading in f64 (docs/reference.md §5): Lambert plus Blinn-Phong.
 
 use super::vec3::{add, dot, normalize, sub};
 use super::{Light, Material};
@@ -10,7 +10,7 @@ use super::{Light, Material};
 ///
 /// with `n` the unit normal, `l` the unit direction towards light l,
 /// `h = normalize(e + l)` and `e` the unit direction from the point to the eye. The specular
-/// term is not gated by `n·l` (as written in REFERENCE §5); when `e + l` vanishes (light
+/// term is not gated by `n·l` (as written in docs/reference.md §5); when `e + l` vanishes (light
 /// exactly behind the point as seen from the eye) that light's specular term is 0.
 /// `normal` need not be unit length; light directions are expected unit (they are normalised
 /// on load).

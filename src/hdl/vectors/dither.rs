@@ -9,7 +9,8 @@ use crate::config::HwConfig;
 use crate::error::Result;
 use crate::hdl::bench::{Bench, Rng};
 use crate::scene::Scene;
-use crate::stage::dither::{Mask, extended_lut, ordered_code};
+use crate::stage::dither::{Mask, ordered_code};
+use crate::stage::gamma::extended_lut;
 use std::hint::black_box;
 use std::time::Instant;
 

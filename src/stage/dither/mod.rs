@@ -40,18 +40,16 @@
 //!
 //! Files: `mask` (Bayer and blue-noise masks, temporal offsets), `ordered` (ordered dither,
 //! fixed and float), `diffusion` (Floyd-Steinberg, fixed and float), `unit` (the configured
-//! [`Dither`], its cost, the temporal period-mean check), `luts` (the gamma LUTs of the two
-//! placements), `stage` (the stage contract).
+//! [`Dither`], its cost, the temporal period-mean check), `stage` (the stage contract). The gamma LUTs
+//! of the two placements are in [`crate::stage::gamma`].
 
 mod diffusion;
-mod luts;
 mod mask;
 mod ordered;
 mod stage;
 mod unit;
 
 pub use diffusion::{FsParams, floyd_steinberg, floyd_steinberg_f64};
-pub use luts::{extended_lut, reduced_lut};
 pub use mask::Mask;
 pub use ordered::{apply_ordered, apply_ordered_f64, ordered_code, ordered_f64};
 pub use stage::DitherStage;

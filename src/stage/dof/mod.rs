@@ -71,6 +71,11 @@
 //! the mask of its own depth, restricted to the image and renormalised (energy preserving),
 //! summed; cost `O(N^2 M^2)`. [`additive_layered`] is the theorem's form: every pixel
 //! spread with its layer's middle mask, summed, no compositing.
+//!
+//! Files: `lens` (blur per depth code), `mask` (taps, difference degree), `layers` (the layer
+//! plan), `fixed` (the fixed datapath, `row_mac`), `float` (the layered float reference),
+//! `reference` (per-pixel scatter, theorem form, error split), `cost` (cost, memories,
+//! signals), `stage` (the stage contract).
 
 mod cost;
 mod fixed;

@@ -165,5 +165,7 @@ pub fn powers(frame_ref: &[f64], hw: &HwConfig, spec: &GammaSpec) -> Vec<f64> {
         .collect()
 }
 
+mod luts;
 mod stage;
+pub use luts::{extended_lut, reduced_lut};
 pub use stage::Gamma;

@@ -4,10 +4,10 @@
 //! stage-local comparison.
 
 use super::{GammaLut, GammaSpec, apply_powers, powers, powers_key};
+use super::{extended_lut, reduced_lut};
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::scene::Scene;
-use crate::stage::dither::{extended_lut, reduced_lut};
 use crate::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut};
 use crate::stage::taps::{FrameCoding, PixelTap, PixelTapF, Taps};
 use crate::stage::{

@@ -49,7 +49,9 @@
 //!
 //! Files: `code.rs` (the log code, encoder, potentiation LUT), `adder.rs` (the log frame word
 //! and the Gaussian-log adder), `sums.rs` (per-pixel accumulation, work and signals), `lut.rs`
-//! (the eq. 15 gamma LUT), `ramp.rs` (`igemu widths` emulation), `stage.rs` (pipeline glue).
+//! (the eq. 15 gamma LUT), `stage.rs` (the stage contract: the encoder and, for structure
+//! (a), the potentiation; the log-domain sums run in the accumulate stage, the eq. 15 LUT in
+//! the gamma stage).
 
 mod adder;
 mod code;

@@ -1,8 +1,8 @@
 //! The gamma LUTs a dither placement needs: the extended-output LUT (`UQd.f`) of the
 //! after-LUT placement and the reduced-address LUT of the before-LUT placement.
 
+use super::{GammaLut, GammaSpec};
 use crate::fixed::{Overflow, QFormat, Quantizer};
-use crate::stage::gamma::{GammaLut, GammaSpec};
 
 /// The gamma LUT with `f` extra output fraction bits (`UQd.f`), for the after-LUT placement.
 pub fn extended_lut(spec: &GammaSpec, addr_bits: u32, f: u32) -> Vec<u32> {
