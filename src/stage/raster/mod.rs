@@ -140,8 +140,9 @@ impl Stage for Raster {
 
     fn float(&self, cx: &Cx, _: &Vec<u64>, taps: &mut Taps, _: &mut Notes) -> Result<()> {
         let (grid, reg) = (cx.layout.grid, cx.layout.samples);
+        // About as many fragments as the fixed raster emitted.
         let mut out = Frags {
-            data: Vec::new(),
+            data: Vec::with_capacity(taps.fixed.frags.as_ref().map_or(0, |f| f.data.len())),
             start: vec![0],
         };
         for p in &taps.float.prims().f {
