@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 pub fn print_cycles(c: &CycleReport) {
     let p = &c.plan;
     println!(
-        "plan: {} | tiles {}x{} px: {} of {} touched | pixels simulated {} of {} ({:.1}%){}",
+        "plan: {} | tiles {}x{} px: {} of {} binned | pixels simulated {} of {} ({:.1}%){}",
         p.stages.join(" -> "),
         p.tile,
         p.tile,

@@ -49,12 +49,12 @@ impl Stage for Gamma {
         let g = hw.gamma.gamma.unwrap_or(scene.display.gamma);
         Ok(Need::yes(if hw.gamma.correction {
             format!(
-                "the frame drives a {}-bit DAC through a LUT correcting gamma {g}",
+                "the frame drives the {}-bit DAC through a LUT correcting gamma {g}",
                 hw.gamma.dac_bits
             )
         } else {
             format!(
-                "the frame drives a {}-bit DAC through a linear LUT (gamma.correction = false)",
+                "the frame drives the {}-bit DAC through a linear LUT (gamma.correction = false)",
                 hw.gamma.dac_bits
             )
         }))
