@@ -75,7 +75,7 @@ pub struct CycleMetrics {
     pub real_time: bool,
 }
 
-/// Small-object flicker of a row's hardware (`--flicker PHASES`; see [`crate::flicker`]):
+/// Small-object flicker of a row's hardware (`--flicker PHASES`; see [`crate::analysis::flicker`]):
 /// the worst object of the flicker scene swept over `phases x phases` sub-pixel phases.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct FlickerMetrics {
