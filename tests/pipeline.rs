@@ -214,3 +214,70 @@ fn the_8_bit_accumulator_loses_dark_codes_the_12_bit_one_keeps() {
     assert!(c8.max_abs_diff > c12.max_abs_diff, "{c8:?} vs {c12:?}");
     assert!(c8.identical_fraction < c12.identical_fraction);
 }
+
+/// A render reusing cached stages equals a render that runs every stage: same DAC codes,
+/// same float reference, same report (apart from wall times and the `reused` list), for a
+/// sequence of configurations that change different stages' inputs, log codings included.
+#[test]
+fn reused_stages_give_the_renders_of_full_runs() {
+    use igemu::config::{DitherKind, Placement};
+    use igemu::pipeline::{Cache, render_with};
+    let strip = |r: &Render| {
+        let mut v = serde_json::to_value(&r.report).unwrap();
+        let o = v.as_object_mut().unwrap();
+        o.remove("timing");
+        o.remove("reused");
+        for s in o["stages"].as_array_mut().unwrap() {
+            let s = s.as_object_mut().unwrap();
+            for k in ["fixed_ms", "float_ms", "local_ms"] {
+                s.remove(k);
+            }
+        }
+        o["cycles"].as_object_mut().unwrap().remove("sim");
+        if let Some(n) = o["stages"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .find(|s| s["name"] == "dof")
+        {
+            n["notes"]
+                .as_object_mut()
+                .map(|m| m.remove("per_pixel_reference"));
+        }
+        v
+    };
+    let cache = Cache::new();
+    let thin = Scene::default_scene();
+    let pin = Scene::embedded("default-pinhole").unwrap();
+    let mut configs: Vec<(&Scene, HwConfig)> = Vec::new();
+    let base = HwConfig::default_config();
+    configs.push((&thin, base.clone()));
+    let mut h = base.clone();
+    h.dof.guard_bits = 2;
+    configs.push((&thin, h));
+    let mut h = base.clone();
+    h.gamma.dac_bits = 10;
+    h.dither.kind = DitherKind::Bayer4;
+    configs.push((&thin, h.clone()));
+    h.dither.placement = Placement::BeforeLut;
+    h.dither.frac_bits = 2;
+    configs.push((&thin, h));
+    for p in ["log8-logadd", "log7-logadd", "log8-potentiate"] {
+        configs.push((&pin, HwConfig::preset(p).unwrap()));
+    }
+    let mut h = HwConfig::preset("log8-logadd").unwrap();
+    h.coding.table_addr_bits = 8;
+    configs.push((&pin, h));
+    let mut reused_any = false;
+    for (i, (s, h)) in configs.iter().enumerate() {
+        let cached = render_with(s, h, RunOptions::default(), Some(&cache)).unwrap();
+        let full = render(s, h, RunOptions::default()).unwrap();
+        assert_eq!(cached.dac, full.dac, "config {i}");
+        assert_eq!(cached.dac_ref, full.dac_ref, "config {i}");
+        assert_eq!(strip(&cached), strip(&full), "config {i}");
+        reused_any |= !cached.report.reused.is_empty();
+    }
+    assert!(reused_any, "the sequence shares stages");
+    let (hits, misses) = cache.stats();
+    assert!(hits > 0 && misses > 0, "{hits} {misses}");
+}
