@@ -87,3 +87,33 @@ pub fn igemu(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into(),
     )
 }
+
+/// `v` rounded to an integer with the hardware rounding mode `q`, computed with the `fixed`
+/// crate's own rounding functions (independent of `igemu::fixed`).
+pub fn round_with(v: fixed::types::I64F64, q: igemu::fixed::Quant) -> i64 {
+    use igemu::fixed::Quant;
+    let tie = v.frac() == fixed::types::I64F64::from_num(0.5);
+    let r = match q {
+        Quant::Trn => v.floor(),
+        Quant::TrnZero => v.round_to_zero(),
+        _ if !tie => v.round(),
+        Quant::Rnd => v.ceil(),
+        Quant::RndZero => v.round_to_zero(),
+        Quant::RndInf => v.round(),
+        Quant::RndMinInf => v.floor(),
+        Quant::RndConv => v.round_ties_even(),
+    };
+    r.to_num::<i64>()
+}
+
+/// The steps of a render through stage `last` (with the reports, tokens, packs and images).
+pub fn steps_through(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: igemu::stage::RunOptions,
+    last: igemu::stage::StageId,
+) -> Vec<igemu::pipeline::Step> {
+    let plan = igemu::pipeline::plan::build(scene, hw).unwrap_or_else(|e| panic!("{e}"));
+    igemu::pipeline::run::run(scene, hw, &plan, opts, None, Some(last))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
