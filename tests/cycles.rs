@@ -447,12 +447,13 @@ fn cost_storage_is_exact() {
     let k = &r.report.cycles.cost;
     let (w, ht) = (640u64, 480u64);
     assert_eq!(k.storage_bits["accumulate"], w * ht * 12);
-    // 16 samples per pixel x (24-bit z + 16-bit intensity + primitive id bits).
+    // The screen's 4x4 samples per pixel plus the tent filter's apron of 2 samples beyond
+    // each edge, x (24-bit z + 16-bit intensity + primitive id bits).
     let prims = work(&r, "input", "primitives");
     let id_bits = (prims + 1).next_power_of_two().trailing_zeros() as u64;
     assert_eq!(
         k.storage_bits["visibility"],
-        w * ht * 16 * (24 + 16 + id_bits)
+        (w * 4 + 4) * (ht * 4 + 4) * (24 + 16 + id_bits)
     );
     assert_eq!(k.rom_bits["gamma"], 4096 * 8);
     assert!(k.packed.iter().all(|p| p.verified), "{:?}", k.packed);

@@ -373,7 +373,8 @@ fn the_sample_buffer_image_packs_and_verifies() {
         (mem.name.as_str(), mem.kind, mem.width),
         ("sample buffer", MemKind::Ram, 34)
     );
-    assert_eq!(mem.depth, 48 * 40 * 16);
+    // The screen's samples plus the tent filter's apron of 2 samples beyond each edge.
+    assert_eq!(mem.depth, (48 * 4 + 4) * (40 * 4 + 4));
     assert_eq!(o.report.cost.storage_bits, mem.depth * 34);
     // The image holds the tap; an empty sample is the far code with the background id.
     let im = &o.images[0];
@@ -397,13 +398,11 @@ fn the_sample_buffer_image_packs_and_verifies() {
     assert_eq!(tap.bg, (0.25f64 * 4095.0 * 16.0).round() as u32);
 }
 
-/// Known problem in src/ (reported, not fixed here): the sample buffer's image covers the
-/// plan's sample region, which extends past the screen by the filter's apron, while the
-/// cost charges a screen-sized memory; when the region reaches a screen edge the image has
-/// more words than the memory and the pack check fails ("12672 words but the cost charges
-/// 12288" for this 32x24 screen at 4x4 samples).
+/// The sample buffer holds the screen's samples plus the filter's apron beyond each edge
+/// (the raster writes them; the edge pixels' windows read them): a region reaching the
+/// screen's edges still fits (it did not when the memory was screen-sized: "12672 words but
+/// the cost charges 12288" for this 32x24 screen at 4x4 samples).
 #[test]
-#[ignore = "src bug: sample buffer image (sample region with apron) larger than its screen-sized memory"]
 fn sample_buffer_pack_verifies_when_the_region_reaches_the_screen_edge() {
     let objects = tri(
         [[1.0, 1.0, 0.3], [30.0, 2.0, 0.7], [4.0, 20.0, 0.5]],
@@ -425,7 +424,8 @@ fn sample_buffer_pack_verifies_when_the_region_reaches_the_screen_edge() {
 #[test]
 fn log_coding_moves_the_sample_buffer_to_logdomain() {
     let s = inner_scene(0.1);
-    let samples = 48 * 40 * 16u64;
+    // The screen's samples plus the tent filter's apron of 2 samples beyond each edge.
+    let samples = (48 * 4 + 4) * (40 * 4 + 4u64);
     let id = id_width(2);
     let lin = render(&s, &HwConfig::default_config(), RunOptions::FAST).unwrap();
     let lin_vis = &lin.report.stages[3];

@@ -181,14 +181,18 @@ pub fn id_bits(prims: usize) -> u32 {
         .max(1)
 }
 
-/// The sample buffer's memory: one word per sample of the screen, holding the depth code,
-/// the stored intensity code (`intensity_bits`: the log code's width under log coding) and
-/// the primitive id.
+/// The sample buffer's memory: one word per sample the filter windows of the screen's pixels
+/// read (the screen's samples plus the filter's apron of `off` samples beyond each edge,
+/// which the raster writes inside the guard band), holding the depth code, the stored
+/// intensity code (`intensity_bits`: the log code's width under log coding) and the
+/// primitive id.
 pub fn sample_buffer(cx: &Cx, prims: usize, intensity_bits: u32) -> Memory {
     let zb = cx.hw.visibility.z.format.total_bits();
+    let off = super::accumulate::kernel(cx.hw).off as u64;
+    let g = &cx.layout.grid;
     Memory::ram(
         SAMPLE_BUFFER,
-        cx.layout.grid.samples(),
+        (g.sw() as u64 + 2 * off) * (g.sh() as u64 + 2 * off),
         zb + intensity_bits + id_bits(prims),
     )
 }

@@ -126,7 +126,7 @@ impl Stage for Logdomain {
             (stored.clone(), None, 0)
         };
         let ib = i_fmt.total_bits();
-        let full = cx.layout.grid.samples();
+        let full = sample_buffer(cx, taps.fixed.prims().q.len(), ib).depth;
         facts.note(
             "sample_buffer_bits_saved",
             full * (ib - code.bits.min(ib)) as u64,
