@@ -268,6 +268,12 @@ fn unknown_stage_and_linear_log_adder_are_refused() {
     assert!(e.to_string().contains("gamma, accumulate"), "{e}");
     let e = hdl::vectors(StageId::Logdomain, &sc, &hw("linear12", |_| {})).unwrap_err();
     assert!(e.to_string().contains("coding.kind"), "{e}");
+    // The linear MAC is not the log-add hardware: its vectors are refused there.
+    let e = hdl::vectors(StageId::Accumulate, &sc, &hw("log8-logadd", |_| {})).unwrap_err();
+    assert!(
+        e.to_string().contains("coding.kind") && e.to_string().contains("--stage logdomain"),
+        "{e}"
+    );
 }
 
 #[test]

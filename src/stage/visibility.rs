@@ -240,8 +240,10 @@ impl Stage for Visibility {
     fn key(&self, cx: &Cx) -> serde_json::Value {
         serde_json::json!({
             "visibility": cx.hw.section("visibility"),
-            // The sample buffer's cost moves to logdomain when the samples are log coded.
+            // The sample buffer's cost moves to logdomain when the samples are log coded;
+            // its apron follows the filter.
             "log_coded": cx.layout.has(StageId::Logdomain),
+            "filter": cx.hw.accumulate.filter,
         })
     }
 

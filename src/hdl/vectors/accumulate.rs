@@ -18,6 +18,13 @@ use std::time::Instant;
 
 /// Fills `b` with the accumulation MAC's parameters and vectors.
 pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
+    if hw.coding.kind == crate::config::CodingKind::LogAdd {
+        return Err(super::bad(
+            hw,
+            "coding.kind",
+            "the accumulate model is the linear MAC (acc_mac.v); log-add sums with the log adder, whose model is --stage logdomain".into(),
+        ));
+    }
     let frame = hw.accumulate.frame;
     let acc_bits = frame.format.total_bits();
     let (_, input) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Input)?;

@@ -72,9 +72,17 @@ impl Stage for Logdomain {
     }
 
     fn key(&self, cx: &Cx) -> serde_json::Value {
+        // The encoder and the potentiation LUT read the kind and the code width; the log
+        // adder's fields (acc_frac_bits, the sb table, quant, overflow) are the accumulate
+        // stage's.
+        let c = &cx.hw.coding;
         serde_json::json!({
-            "coding": cx.hw.section("coding"),
+            "kind": c.kind,
+            "log_bits": c.log_bits,
             "display": cx.scene.display,
+            // The potentiation LUT's width; the sample buffer's apron.
+            "frame_int_bits": cx.hw.accumulate.frame.format.int_bits,
+            "filter": cx.hw.accumulate.filter,
         })
     }
 
