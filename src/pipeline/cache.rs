@@ -5,8 +5,8 @@
 //! simulations (keyed by their workload).
 //!
 //! Entries are shared read-only (`Arc`), so a reused result is identical to a recomputed
-//! one. A key being computed by one thread is waited for by the others (each stage result
-//! is computed once). The least recently used entries beyond the capacity are dropped.
+//! one. No lock is held while a stage runs; the least recently used entries beyond the
+//! capacity are dropped.
 
 use super::run::Outcome;
 use crate::cycles::SimResult;
@@ -25,11 +25,9 @@ pub const MEMO_CAPACITY: usize = 32;
 /// Simulations kept.
 pub const SIM_CAPACITY: usize = 64;
 
-type Slot<T> = Arc<Mutex<Option<T>>>;
-
-/// A map of single-flight slots with least-recently-used eviction.
+/// A map with least-recently-used eviction.
 struct Lru<T> {
-    map: Mutex<HashMap<u64, (Slot<T>, u64)>>,
+    map: Mutex<HashMap<u64, (T, u64)>>,
     tick: AtomicU64,
     capacity: usize,
 }
@@ -44,40 +42,30 @@ impl<T: Clone> Lru<T> {
     }
 
     /// The value under `key` (and `true`), or `make()`'s (then stored) and `false`. Errors
-    /// are not stored.
+    /// are not stored. No lock is held while `make` runs: it may itself use the cache, and a
+    /// rayon worker waiting in it may run another job that asks for the same key. Two
+    /// threads may then compute the same key; the first value stored wins (the two are
+    /// identical: a stage's result depends only on its key).
     fn get_or<E>(
         &self,
         key: u64,
         make: impl FnOnce() -> std::result::Result<T, E>,
     ) -> std::result::Result<(T, bool), E> {
-        let slot = {
-            let mut m = self.map.lock().unwrap_or_else(|e| e.into_inner());
-            let now = self.tick.fetch_add(1, Relaxed);
-            let slot = match m.get_mut(&key) {
-                Some((s, used)) => {
-                    *used = now;
-                    s.clone()
-                }
-                None => {
-                    let s: Slot<T> = Arc::new(Mutex::new(None));
-                    m.insert(key, (s.clone(), now));
-                    s
-                }
-            };
-            if m.len() > self.capacity
-                && let Some(&old) = m.iter().min_by_key(|(_, (_, u))| *u).map(|(k, _)| k)
-            {
-                m.remove(&old);
-            }
-            slot
-        };
-        let mut v = slot.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(x) = &*v {
-            return Ok((x.clone(), true));
+        let lock = || self.map.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((v, used)) = lock().get_mut(&key) {
+            *used = self.tick.fetch_add(1, Relaxed);
+            return Ok((v.clone(), true));
         }
         let x = make()?;
-        *v = Some(x.clone());
-        Ok((x, false))
+        let mut m = lock();
+        let now = self.tick.fetch_add(1, Relaxed);
+        let v = m.entry(key).or_insert((x, now)).0.clone();
+        if m.len() > self.capacity
+            && let Some(&old) = m.iter().min_by_key(|(_, (_, u))| *u).map(|(k, _)| k)
+        {
+            m.remove(&old);
+        }
+        Ok((v, false))
     }
 }
 
