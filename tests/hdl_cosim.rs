@@ -622,3 +622,21 @@ fn yosys_cell_counts_grow_with_the_widths_and_are_cached() {
     assert_eq!((again.cells, again.by_type), (a.cells, a.by_type));
     let _ = std::fs::remove_dir_all(&cache);
 }
+
+#[test]
+fn a_relative_bench_directory_runs_under_icarus() {
+    if !icarus("a_relative_bench_directory_runs_under_icarus") {
+        return;
+    }
+    // The test runs in the crate's directory: a bench directory relative to it.
+    let rel = format!("target/hdl-relative-{}", std::process::id());
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_igemu"))
+        .args(["hdl", "vectors", "--stage", "gamma", "--out", &rel, "--run"])
+        .output()
+        .expect("run igemu");
+    let text =
+        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+    std::fs::remove_dir_all(&rel).ok();
+    assert_eq!(o.status.code(), Some(0), "{text}");
+    assert!(text.contains("TESTBENCH OK"), "{text}");
+}

@@ -65,7 +65,9 @@ pub fn run_icarus_tb(tb: &str, module: &str, dir: &Path) -> std::result::Result<
     }
     let compile_s = t.elapsed().as_secs_f64();
     let mut vvp = Command::new("vvp");
-    vvp.arg("-n").arg(&sim).current_dir(dir);
+    // vvp runs in the bench directory (the ROM files are read from there): give it the
+    // compiled simulation by a name relative to that directory.
+    vvp.arg("-n").arg("sim.vvp").current_dir(dir);
     run_simulation(vvp, "vvp", compile_s)
 }
 
