@@ -7,6 +7,7 @@
 //! the DAC codes end to end, and simulate the cycle model on the stages' tokens.
 
 pub mod cache;
+pub mod estimate;
 pub mod plan;
 pub mod report;
 pub mod run;
@@ -83,6 +84,7 @@ pub fn render_with(
     cache: Option<&Cache>,
 ) -> Result<Render> {
     let plan = plan::build(scene, hw)?;
+    check_memory(scene, &plan, hw, opts)?;
     let steps = run::run(scene, hw, &plan, opts, cache, None)?;
     let taps = &steps.last().expect("a plan runs stages").outcome.taps;
     let px = taps.fixed.pixels();
@@ -103,6 +105,7 @@ pub fn render_with(
         &dac_ref,
         &ideal.ideal,
         cache,
+        opts,
     );
     Ok(Render {
         report,
@@ -114,6 +117,33 @@ pub fn render_with(
         workload,
         contour_map,
     })
+}
+
+/// Refuses a plan whose memory estimate is over the limit (`opts.max_memory`, by default
+/// half the machine's memory), naming the fields that drive it.
+fn check_memory(scene: &Scene, plan: &Plan, hw: &HwConfig, opts: RunOptions) -> Result<()> {
+    let e = &plan.memory(hw, opts);
+    let limit = opts.max_memory.unwrap_or_else(estimate::default_limit);
+    if e.bytes <= limit {
+        return Ok(());
+    }
+    let parts: Vec<String> = e
+        .parts
+        .iter()
+        .map(|p| format!("{} {} from {}", p.what, estimate::human(p.bytes), p.drivers))
+        .collect();
+    Err(crate::error::Error::File(crate::error::FileError {
+        file: scene.name.clone(),
+        line: None,
+        col: None,
+        field: "image.width, image.height, raster.samples".into(),
+        msg: format!(
+            "the plan needs about {} ({}) but the limit is {} (--max-memory; by default half the machine's memory); reduce the resolution or raster.samples, or raise --max-memory",
+            estimate::human(e.bytes),
+            parts.join("; "),
+            estimate::human(limit)
+        ),
+    }))
 }
 
 /// Runs the plan through stage `last` and returns the taps after it (for test vectors and
@@ -141,6 +171,7 @@ pub fn run_through(
             ),
         }));
     }
+    check_memory(scene, &plan, hw, opts)?;
     let steps = run::run(scene, hw, &plan, opts, None, Some(last))?;
     let taps = steps.last().expect("the plan runs it").outcome.taps.clone();
     Ok((plan, taps))

@@ -232,6 +232,11 @@ pub struct PlanReport {
     pub gamma: f64,
     /// The tile map.
     pub tiles: TileReport,
+    /// The memory estimate, made before any stage ran.
+    pub memory: super::estimate::Estimate,
+    /// What the user should know about this plan (options without effect, edge effects).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// The tile map in the report.
@@ -250,12 +255,25 @@ pub struct TileReport {
 }
 
 impl Plan {
+    /// The memory estimate of running the plan with `opts`.
+    pub fn memory(
+        &self,
+        hw: &HwConfig,
+        opts: crate::stage::RunOptions,
+    ) -> super::estimate::Estimate {
+        super::estimate::estimate(self, &self.host, hw, opts)
+    }
     /// The planned stages in run order.
     pub fn order(&self) -> &[StageId] {
         &self.layout.order
     }
     /// The report form.
-    pub fn report(&self, scene: &Scene, hw: &HwConfig) -> PlanReport {
+    pub fn report(
+        &self,
+        scene: &Scene,
+        hw: &HwConfig,
+        opts: crate::stage::RunOptions,
+    ) -> PlanReport {
         let l = &self.layout;
         PlanReport {
             stages: l.order.iter().map(|s| s.name().to_string()).collect(),
@@ -271,6 +289,37 @@ impl Plan {
                 binned: l.tiles.count() as u64,
                 binned_pixels: l.tiles.touched_pixels(&l.region),
             },
+            memory: self.memory(hw, opts),
+            notes: self.notes(hw, opts),
         }
+    }
+
+    /// Notes on the plan: an option that has no effect on it, and a guard band narrower
+    /// than the filter's reach beyond the screen's edge (the edge pixels then read
+    /// background samples where geometry was clipped away).
+    pub fn notes(&self, hw: &HwConfig, opts: crate::stage::RunOptions) -> Vec<String> {
+        let mut notes = Vec::new();
+        if opts.dof_reference && !self.layout.has(StageId::Dof) {
+            notes.push(
+                "--dof-reference has no effect: the plan has no dof stage (a pinhole camera)"
+                    .into(),
+            );
+        }
+        let k = Kernel::new(
+            hw.accumulate.filter,
+            hw.raster.samples,
+            hw.accumulate.weight_bits,
+            hw.accumulate.gaussian_sigma,
+        );
+        let n = k.n as i64;
+        let reach = k.off.max(k.size as i64 - n - k.off);
+        let reach_px = (reach + n - 1) / n;
+        if (hw.raster.guard_band as i64) < reach_px {
+            notes.push(format!(
+                "raster.guard_band = {} px is narrower than the {:?} filter's reach of {reach_px} px beyond the screen: the outermost {reach_px} pixel rows and columns read background samples where geometry was clipped away (they fade toward the background); use a guard band of at least {reach_px} px",
+                hw.raster.guard_band, hw.accumulate.filter
+            ));
+        }
+        notes
     }
 }

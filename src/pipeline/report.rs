@@ -53,6 +53,10 @@ pub struct Timing {
     pub local_ms: f64,
     /// Threads used.
     pub threads: usize,
+    /// Peak resident memory of the process so far, bytes (where the system tells it; the
+    /// plan's estimate is `plan.memory`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_memory_bytes: Option<u64>,
 }
 
 /// The render report (`render --json`).
@@ -160,6 +164,7 @@ pub(super) fn build(
     dac_ref: &[u16],
     ideal: &IdealImage,
     cache: Option<&Cache>,
+    opts: crate::stage::RunOptions,
 ) -> (Report, Workload, Vec<u8>) {
     let (width, height) = (scene.image.width, scene.image.height);
     let codes = compare::codes(dac, dac_ref, hw.gamma.dac_bits);
@@ -204,6 +209,7 @@ pub(super) fn build(
         float_ms: stages.iter().map(|s| s.float_ms).sum(),
         local_ms: stages.iter().map(|s| s.local_ms).sum(),
         threads: rayon::current_num_threads(),
+        peak_memory_bytes: super::estimate::peak_memory(),
     };
     let report = Report {
         igemu_version: env!("CARGO_PKG_VERSION").into(),
@@ -214,7 +220,7 @@ pub(super) fn build(
             front_end: plan.host.stats.clone(),
         },
         hardware: hw.clone(),
-        plan: plan.report(scene, hw),
+        plan: plan.report(scene, hw, opts),
         stages,
         reused: steps
             .iter()

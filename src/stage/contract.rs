@@ -35,6 +35,10 @@ pub struct RunOptions {
     pub stage_local: bool,
     /// Also run the (slow) per-pixel depth-of-field reference and the layer theorem check.
     pub dof_reference: bool,
+    /// Refuse a plan whose memory estimate exceeds this many bytes (`None`: half the
+    /// machine's memory). Not part of any stage's key.
+    #[serde(skip)]
+    pub max_memory: Option<u64>,
 }
 
 impl Default for RunOptions {
@@ -42,6 +46,7 @@ impl Default for RunOptions {
         Self {
             stage_local: true,
             dof_reference: false,
+            max_memory: None,
         }
     }
 }
@@ -51,6 +56,7 @@ impl RunOptions {
     pub const FAST: RunOptions = RunOptions {
         stage_local: false,
         dof_reference: false,
+        max_memory: None,
     };
 }
 

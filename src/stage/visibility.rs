@@ -182,17 +182,19 @@ pub fn id_bits(prims: usize) -> u32 {
 }
 
 /// The sample buffer's memory: one word per sample the filter windows of the screen's pixels
-/// read (the screen's samples plus the filter's apron of `off` samples beyond each edge,
+/// read (the screen's samples plus the filter's apron beyond the edges,
 /// which the raster writes inside the guard band), holding the depth code, the stored
 /// intensity code (`intensity_bits`: the log code's width under log coding) and the
 /// primitive id.
 pub fn sample_buffer(cx: &Cx, prims: usize, intensity_bits: u32) -> Memory {
     let zb = cx.hw.visibility.z.format.total_bits();
-    let off = super::accumulate::kernel(cx.hw).off as u64;
+    // The filter windows reach `size - n` samples beyond the screen's, split over both edges.
+    let k = super::accumulate::kernel(cx.hw);
+    let apron = (k.size - k.n as usize) as u64;
     let g = &cx.layout.grid;
     Memory::ram(
         SAMPLE_BUFFER,
-        (g.sw() as u64 + 2 * off) * (g.sh() as u64 + 2 * off),
+        (g.sw() as u64 + apron) * (g.sh() as u64 + apron),
         zb + intensity_bits + id_bits(prims),
     )
 }

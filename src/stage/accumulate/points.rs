@@ -14,14 +14,18 @@ pub struct PointFrags<T> {
     pub samples: Vec<u32>,
 }
 
-/// The sample region needed for a pixel region with this kernel.
+/// The sample region the filter windows of a pixel region read: pixel `p`'s window is the
+/// samples `[p n - off, p n - off + size)`. The window reaches `off` samples before the
+/// pixel's own and `size - n - off` after them: the same when `(base - 1) n` is even, one
+/// more after when it is odd (a tent over one sample per pixel).
 pub fn sample_region(r: &Region, k: &Kernel) -> SampleRegion {
     let n = k.n as i64;
+    let after = k.size as i64 - n - k.off;
     SampleRegion {
         c0: r.x0 as i64 * n - k.off,
         k0: r.y0 as i64 * n - k.off,
-        c1: r.x1 as i64 * n + k.off,
-        k1: r.y1 as i64 * n + k.off,
+        c1: r.x1 as i64 * n + after,
+        k1: r.y1 as i64 * n + after,
     }
 }
 

@@ -89,6 +89,31 @@ pub fn plan_layers(
     keys.sort_unstable_by(|a, b| b.cmp(a));
     keys.dedup();
     let sig = |k: u32| lens.sigma_code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
+    // Every layer's mask lies between the masks of its ends (sigma is monotone in depth),
+    // so the largest mask over the depth codes present bounds them all: check it before any
+    // mask is built (a huge lens would otherwise allocate huge masks), and name it, so that
+    // raising the limit to it is enough.
+    if let Some((worst, s)) = keys
+        .iter()
+        .map(|&k| (k, sig(k)))
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+    {
+        let m = half_size(s, p.k);
+        if m > p.max_half_size as usize {
+            let z = lens.z_of(worst);
+            let advice = if m <= MAX_HALF_SIZE_LIMIT as usize {
+                format!("raise dof.max_half_size to {m} (at most {MAX_HALF_SIZE_LIMIT})")
+            } else {
+                format!(
+                    "that is beyond the largest configurable half-size {MAX_HALF_SIZE_LIMIT}: reduce camera.lens.lens_radius (or raise f_number) or move the focus"
+                )
+            };
+            return Err(format!(
+                "the largest blur in the frame (screen z {z:.4}) is sigma {s:.2} px, a mask half-size M = {m} > dof.max_half_size = {}; {advice}",
+                p.max_half_size
+            ));
+        }
+    }
     let mid_sigma = |far: u32, near: u32| {
         let zm = (lens.z_of(far) + lens.z_of(near)) / 2.0;
         // The middle depth as a code (the background's z_inf is exact): sigma from its code.

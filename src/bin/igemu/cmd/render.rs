@@ -55,6 +55,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         RunOptions {
             stage_local: !a.no_local,
             dof_reference: a.dof_reference,
+            ..RunOptions::default()
         },
     )?;
     let (w, h) = (r.report.scene.width, r.report.scene.height);

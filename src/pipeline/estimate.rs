@@ -1,0 +1,161 @@
+//! The plan's memory estimate, made before any stage allocates: the sample buffers of the
+//! modelled region, the fragment lists, and the per-pixel planes of the frame, depth of
+//! field, gamma and the comparison, fixed and float. A plan over the limit is refused with
+//! the fields that drive it (`image.width`, `image.height`, `raster.samples`, the number and
+//! size of the primitives) instead of aborting on an allocation.
+//!
+//! The estimate is a sum of named parts in bytes, from the sizes of the model's buffers (a
+//! fixed sample is 12 bytes, a float one 20; a fixed fragment 12, a float one 24; see
+//! `docs/reliability.md` for the measured peak against the estimate).
+
+use super::plan::Plan;
+use crate::config::HwConfig;
+use crate::scene::{HostScene, Primitive};
+use crate::stage::{RunOptions, StageId};
+use serde::Serialize;
+
+/// One part of the estimate.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Part {
+    /// What it is.
+    pub what: &'static str,
+    /// Bytes.
+    pub bytes: u64,
+    /// The fields that drive it.
+    pub drivers: &'static str,
+}
+
+/// The memory estimate of a plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Estimate {
+    /// Total bytes.
+    pub bytes: u64,
+    /// The parts.
+    pub parts: Vec<Part>,
+}
+
+/// Covered samples a primitive can emit: its area in samples (a triangle's exact area of
+/// its host coordinates plus one sample along its perimeter, a line's length x width, a
+/// point's square), at most the region's samples.
+fn fragments(p: &Primitive, n: f64, region_samples: f64) -> f64 {
+    let n2 = n * n;
+    let area = match p {
+        Primitive::Triangle(v) => {
+            let a = ((v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (v[1].y - v[0].y))
+                .abs()
+                / 2.0;
+            let per = (0..3)
+                .map(|k| {
+                    let (a, b) = (&v[k], &v[(k + 1) % 3]);
+                    (b.x - a.x).hypot(b.y - a.y)
+                })
+                .sum::<f64>();
+            a + per / n
+        }
+        Primitive::Line { a, b, width } => ((b.x - a.x).hypot(b.y - a.y) + width) * (width + 1.0),
+        Primitive::Point { size, .. } => (size + 1.0) * (size + 1.0),
+    };
+    // Non-finite sizes are refused by the scene's validation; stay safe anyway.
+    let f = area * n2;
+    if f.is_finite() {
+        f.min(region_samples)
+    } else {
+        region_samples
+    }
+}
+
+/// Estimates the memory a run of `plan` needs.
+pub fn estimate(plan: &Plan, host: &HostScene, hw: &HwConfig, opts: RunOptions) -> Estimate {
+    let l = &plan.layout;
+    let region_samples = l.samples.len() as f64;
+    let pixels = l.grid.pixels();
+    let mut parts = Vec::new();
+    let mut part = |what, bytes: f64, drivers| {
+        parts.push(Part {
+            what,
+            bytes: bytes.ceil() as u64,
+            drivers,
+        })
+    };
+    // Fixed (12 B) and float (20 B) sample buffers, the stage-local float shadow, the log
+    // stage's re-coded copies.
+    let mut per_sample = 12.0 + 20.0;
+    if opts.stage_local {
+        per_sample += 20.0;
+    }
+    if l.has(StageId::Logdomain) {
+        per_sample += 24.0;
+    }
+    part(
+        "sample buffers",
+        region_samples * per_sample,
+        "the region the primitives touch (image.width x image.height) and raster.samples",
+    );
+    let frags: f64 = host
+        .prims
+        .iter()
+        .map(|p| fragments(p, l.grid.n as f64, region_samples))
+        .sum();
+    part(
+        "fragments",
+        frags * (12.0 + 24.0),
+        "the primitives' screen area with overdraw and raster.samples",
+    );
+    // Frame codes, depth and coverage (10 B) and the float frame (8 B), kept per stage tap;
+    // gamma's codes and float values; the comparison's planes (luminance integrals, spans).
+    let mut per_pixel = 2.0 * (10.0 + 8.0) + 4.0 + 16.0 + 4.0 + 120.0;
+    if l.has(StageId::Dof) {
+        // The composite (16 B) and the widest layer's four u128 planes (64 B), fixed; the
+        // float layers' planes (48 B) and the new frame (8 B); the stage-local copy.
+        per_pixel += 16.0 + 64.0 + 56.0 + if opts.stage_local { 64.0 } else { 0.0 };
+    }
+    if l.has(StageId::Dither) {
+        per_pixel += 4.0 + 8.0 + 8.0;
+    }
+    part(
+        "per-pixel planes",
+        pixels as f64 * per_pixel,
+        "image.width x image.height",
+    );
+    let _ = hw;
+    Estimate {
+        bytes: parts.iter().map(|p| p.bytes).sum(),
+        parts,
+    }
+}
+
+/// A safe default limit: half the machine's physical memory (`/proc/meminfo`), or 4 GiB
+/// where that cannot be read.
+pub fn default_limit() -> u64 {
+    let total = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        t.lines()
+            .find_map(|l| l.strip_prefix("MemTotal:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+    });
+    total.map_or(4 << 30, |kb| kb * 1024 / 2)
+}
+
+/// Bytes in a readable unit.
+pub fn human(bytes: u64) -> String {
+    let b = bytes as f64;
+    if b >= (1u64 << 30) as f64 {
+        format!("{:.2} GiB", b / (1u64 << 30) as f64)
+    } else {
+        format!("{:.1} MiB", b / (1u64 << 20) as f64)
+    }
+}
+
+/// The peak resident memory of this process so far (`VmHWM` of `/proc/self/status`), where
+/// the system tells it.
+pub fn peak_memory() -> Option<u64> {
+    let t = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: u64 = t
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb * 1024)
+}
