@@ -139,6 +139,29 @@ fn a_failed_write_leaves_no_temporary_and_exits_2_naming_the_path() {
         err.contains(&s(&missing)) && err.contains("folder exists"),
         "{err}"
     );
+    for args in [
+        vec![
+            "cycles".to_string(),
+            "--vcd".into(),
+            s(&missing.with_extension("vcd")),
+        ],
+        vec![
+            "render".to_string(),
+            "--no-local".into(),
+            "-o".into(),
+            s(&d.join("ok.png")),
+            "--report".into(),
+            s(&missing.with_extension("json")),
+        ],
+    ] {
+        let a: Vec<&str> = args.iter().map(|x| x.as_str()).collect();
+        let (code, _, err) = igemu(&a);
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains("no-such-folder") && !err.contains("panicked"),
+            "{err}"
+        );
+    }
     // The destination is a folder.
     let folder = d.join("taken.png");
     std::fs::create_dir(&folder).unwrap();
