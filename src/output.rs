@@ -1,7 +1,191 @@
-//! Writing images: DAC codes, raw stage codes and difference maps as PNG.
+//! Writing outputs: every file the command line writes goes through [`AtomicFile`] (a
+//! temporary file in the destination's folder, flushed, synced and renamed over the
+//! destination, so a reader or a killed process never sees a half-written file), and the
+//! PNG writers of DAC codes, raw taps and difference maps use it.
 
 use crate::error::{Error, Result};
-use image::{ImageBuffer, Luma};
+use image::{ImageBuffer, ImageFormat, Luma};
+use std::fs::{File, OpenOptions};
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// An output file being written: the bytes go to a temporary file `.<name>.<pid>.<n>.tmp`
+/// in the destination's folder; [`AtomicFile::commit`] flushes and syncs it and renames it
+/// over the destination. Dropped without a commit (an error, a panic), the temporary is
+/// removed and the destination is untouched. A process killed while writing leaves the
+/// destination as it was (and the hidden temporary behind).
+pub struct AtomicFile {
+    dest: PathBuf,
+    tmp: PathBuf,
+    file: Option<BufWriter<File>>,
+}
+
+/// The error of an output: names the destination, says what failed and what to do.
+fn out_error(dest: &Path, what: String, e: &io::Error) -> Error {
+    Error::Io {
+        path: dest.display().to_string(),
+        source: io::Error::new(e.kind(), format!("{what}: {e}")),
+    }
+}
+
+impl AtomicFile {
+    /// Opens a temporary file next to `dest`. Refuses a destination that is a folder or a
+    /// read-only file; the destination's permissions carry over to the new file.
+    pub fn create(dest: impl AsRef<Path>) -> Result<AtomicFile> {
+        static SERIAL: AtomicU64 = AtomicU64::new(0);
+        let dest = dest.as_ref();
+        let bad = |msg: &str| out_error(dest, "cannot write".into(), &io::Error::other(msg));
+        let name = match dest.file_name() {
+            Some(n) if !dest.as_os_str().to_string_lossy().ends_with('/') => n,
+            _ => return Err(bad("not a file name; name a file")),
+        };
+        let existing = std::fs::metadata(dest).ok();
+        if let Some(m) = &existing {
+            if m.is_dir() {
+                return Err(bad("is a folder; name a file in it"));
+            }
+            if m.permissions().readonly() {
+                return Err(bad("is read-only; make it writable or choose another path"));
+            }
+        }
+        let dir = match dest.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let pid = std::process::id();
+        let mut attempt = 0;
+        let (tmp, file) = loop {
+            let n = SERIAL.fetch_add(1, Ordering::Relaxed);
+            let tmp = dir.join(format!(".{}.{pid}.{n}.tmp", name.to_string_lossy()));
+            match OpenOptions::new().write(true).create_new(true).open(&tmp) {
+                Ok(f) => break (tmp, f),
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists && attempt < 100 => {
+                    attempt += 1;
+                }
+                Err(e) => {
+                    return Err(out_error(
+                        dest,
+                        format!(
+                            "cannot create a temporary file in {}; check that the folder exists and is writable",
+                            dir.display()
+                        ),
+                        &e,
+                    ));
+                }
+            }
+        };
+        if let Some(m) = existing
+            && let Err(e) = file.set_permissions(m.permissions())
+        {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(out_error(dest, "cannot copy its permissions".into(), &e));
+        }
+        Ok(AtomicFile {
+            dest: dest.to_path_buf(),
+            tmp,
+            file: Some(BufWriter::new(file)),
+        })
+    }
+
+    /// The destination.
+    pub fn path(&self) -> &Path {
+        &self.dest
+    }
+
+    /// Flushes and syncs the temporary and renames it over the destination (on failure the
+    /// temporary is removed and the destination untouched).
+    pub fn commit(mut self) -> Result<()> {
+        let w = self.file.take().expect("open until commit");
+        let file = match w.into_inner() {
+            Ok(f) => f,
+            Err(e) => return Err(self.fail("cannot write", e.error())),
+        };
+        if let Err(e) = file.sync_all() {
+            return Err(self.fail("cannot write", &e));
+        }
+        drop(file);
+        if let Err(e) = std::fs::rename(&self.tmp, &self.dest) {
+            return Err(self.fail("cannot rename the temporary file over it", &e));
+        }
+        // The rename is durable once the folder is synced (best effort: not every file
+        // system can sync a folder).
+        if let Some(dir) = self.tmp.parent()
+            && let Ok(d) = File::open(if dir.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                dir
+            })
+        {
+            let _ = d.sync_all();
+        }
+        self.tmp = PathBuf::new();
+        Ok(())
+    }
+
+    fn fail(&mut self, what: &str, e: &io::Error) -> Error {
+        let err = out_error(
+            &self.dest,
+            format!("{what} (temporary {})", self.tmp.display()),
+            e,
+        );
+        self.discard();
+        err
+    }
+
+    fn discard(&mut self) {
+        drop(self.file.take());
+        if !self.tmp.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.tmp);
+            self.tmp = PathBuf::new();
+        }
+    }
+
+    fn writer(&mut self) -> &mut BufWriter<File> {
+        self.file.as_mut().expect("open until commit")
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.writer().write(buf)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.writer().flush()
+    }
+}
+
+impl Seek for AtomicFile {
+    fn seek(&mut self, pos: SeekFrom) -> io::Result<u64> {
+        self.writer().seek(pos)
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        self.discard();
+    }
+}
+
+/// Writes `dest` atomically with `f` (see [`AtomicFile`]); an error of `f` leaves the
+/// destination untouched and no temporary behind.
+pub fn write_with(
+    dest: impl AsRef<Path>,
+    f: impl FnOnce(&mut AtomicFile) -> io::Result<()>,
+) -> Result<()> {
+    let mut out = AtomicFile::create(dest)?;
+    if let Err(e) = f(&mut out) {
+        let dest = out.dest.clone();
+        drop(out);
+        return Err(out_error(&dest, "cannot write".into(), &e));
+    }
+    out.commit()
+}
+
+/// Writes `bytes` to `dest` atomically.
+pub fn write_file(dest: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<()> {
+    write_with(dest, |w| w.write_all(bytes.as_ref()))
+}
 
 fn save<P: image::Pixel<Subpixel = S> + image::PixelWithColorType, S: image::Primitive>(
     img: ImageBuffer<P, Vec<S>>,
@@ -10,10 +194,14 @@ fn save<P: image::Pixel<Subpixel = S> + image::PixelWithColorType, S: image::Pri
 where
     [S]: image::EncodableLayout,
 {
-    img.save(path).map_err(|e| Error::Image {
+    let image_error = |e: image::ImageError| Error::Image {
         path: path.into(),
         msg: e.to_string(),
-    })
+    };
+    let format = ImageFormat::from_path(path).map_err(image_error)?;
+    let mut out = AtomicFile::create(path)?;
+    img.write_to(&mut out, format).map_err(image_error)?;
+    out.commit()
 }
 
 /// Writes DAC codes of `bits` width: 8-bit PNG for `bits <= 8`, else 16-bit, each code

@@ -252,3 +252,105 @@ fn a_bad_choice_names_the_value_and_the_choices_and_exits_2() {
         &["--filter", "sinc", "box, tent, gaussian"],
     );
 }
+
+/// Every numeric flag out of its range exits 2 naming the flag and the range, before any
+/// work (`-0.1` too: clap would take it for a flag).
+#[test]
+fn numeric_flags_out_of_range_exit_2_naming_the_flag() {
+    for v in ["2", "nan", "inf", "-0.1", "1.0000001"] {
+        for flag in ["--max-visible", "--min-identical"] {
+            expect_error(&["check", flag, v], &[flag, "0..=1"]);
+        }
+    }
+    for (flag, v, range) in [
+        ("--gamma", "1e308", "(1, 5]"),
+        ("--gamma", "1", "(1, 5]"),
+        ("--gamma", "nan", "(1, 5]"),
+        ("--contrast", "nan", "> 1"),
+        ("--contrast", "inf", "> 1"),
+        ("--contrast", "-3", "> 1"),
+        ("--weber", "1", "(0, 1)"),
+        ("--weber", "0", "(0, 1)"),
+        ("--weber", "-0.02", "(0, 1)"),
+    ] {
+        let mut args = vec!["widths"];
+        for (f, ok) in [
+            ("--contrast", "100"),
+            ("--weber", "0.02"),
+            ("--gamma", "2.4"),
+        ] {
+            args.extend([f, if f == flag { v } else { ok }]);
+        }
+        expect_error(&args, &[flag, range]);
+    }
+    // Finite flags whose widths are beyond any code.
+    expect_error(
+        &["widths", "--contrast", "1e300", "--weber", "0.02"],
+        &["--contrast", "64-bit", "1e300"],
+    );
+    expect_error(
+        &["widths", "--contrast", "100", "--weber", "1e-300"],
+        &["--weber", "64-bit"],
+    );
+    let dof = |f: &str, c: &str, fl: &str, d: &str| {
+        vec![
+            "dof".to_string(),
+            "--f-number".into(),
+            f.into(),
+            "--coc".into(),
+            c.into(),
+            "--focal".into(),
+            fl.into(),
+            "--distance".into(),
+            d.into(),
+        ]
+    };
+    for (args, flag) in [
+        (dof("1e308", "0.035", "200", "2500"), "--f-number"),
+        (dof("nan", "0.035", "200", "2500"), "--f-number"),
+        (dof("-11", "0.035", "200", "2500"), "--f-number"),
+        (dof("11", "1e308", "200", "2500"), "--coc"),
+        (dof("11", "1e-308", "200", "2500"), "--coc"),
+        (dof("11", "0.035", "inf", "2500"), "--focal"),
+        (dof("11", "0.035", "200", "1e308"), "--distance"),
+        (dof("11", "0.035", "200", "100"), "--distance"),
+    ] {
+        let a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+        expect_error(&a, &[flag, "got"]);
+    }
+    for v in ["nan", "inf", "0", "-5", "1e308"] {
+        expect_error(
+            &["cycles", "--clock-mhz", v],
+            &["--clock-mhz", "(0, 10000]"],
+        );
+    }
+}
+
+/// A contrast whose widths round to 0 bits has no narrower width to try: no u32 underflow
+/// (the tests and the binary run with overflow checks), exit 0.
+#[test]
+fn widths_of_a_tiny_contrast_do_not_underflow() {
+    let (code, out, err) = igemu(&["widths", "--contrast", "1.01", "--weber", "0.02"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("->  0 bits") && !err.contains("panicked"),
+        "{out}{err}"
+    );
+    // The library directly: a recommendation of 0 and of 1 bit.
+    let mut w = igemu::analysis::calc::widths(1.01, 0.02, 2.4).unwrap();
+    assert_eq!((w.linear.bits, w.log_grades.bits), (0, 0));
+    assert!(
+        igemu::analysis::widths::validate_widths(&w)
+            .iter()
+            .all(|c| c.code_bits > 0 && c.dac_bits > 0)
+    );
+    w.linear.bits = 1;
+    w.dac.bits = 1;
+    let checks = igemu::analysis::widths::validate_widths(&w);
+    assert_eq!(
+        checks.len(),
+        1,
+        "only the recommended 1-bit linear row: {checks:?}"
+    );
+    assert!(checks[0].recommended);
+}

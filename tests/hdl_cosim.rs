@@ -1,8 +1,9 @@
 //! HDL co-simulation: every Verilog model in hdl-models/rtl/ agrees bit for bit with the
 //! Rust model on its vectors (scene taps, exhaustive, random) at two or more width
 //! settings, under Icarus Verilog and Verilator; the log adder also on its full pair space.
-//! Without a simulator installed the simulator tests print a skip line for it and pass; the
-//! vector and verdict tests run everywhere.
+//! Without a simulator installed the simulator tests print a skip line for it and pass,
+//! unless `IGEMU_REQUIRE_HDL=1` (set by `.ci/run`): then every skip fails its test, so a
+//! co-simulation cannot go unrun unseen. The vector and verdict tests run everywhere.
 
 mod common;
 
@@ -31,14 +32,35 @@ fn small_scene() -> Scene {
     scene(64, 48, 0.1, &objects)
 }
 
+/// The environment variable that turns every skip into a failure.
+const REQUIRE: &str = "IGEMU_REQUIRE_HDL";
+
+/// Whether the simulators are required (`IGEMU_REQUIRE_HDL=1`).
+fn required() -> bool {
+    std::env::var(REQUIRE).is_ok_and(|v| v == "1")
+}
+
+/// A test part that cannot run: prints its skip line, or fails the test when `require`.
+fn skip_or_fail(line: &str, require: bool) {
+    if require {
+        panic!("{line}; {REQUIRE}=1 requires it: install the simulators or unset {REQUIRE}");
+    }
+    println!("{line}");
+}
+
+/// A skip of the running test (fails it under `IGEMU_REQUIRE_HDL=1`).
+fn skip(line: &str) {
+    skip_or_fail(line, required());
+}
+
 /// Whether Icarus Verilog is installed; prints the skip line when it is not.
 fn icarus(test: &str) -> bool {
     if hdl::available("iverilog") && hdl::available("vvp") {
         return true;
     }
-    println!(
+    skip(&format!(
         "SKIP {test}: iverilog/vvp not installed (apt-get install -y iverilog); HDL co-simulation not run"
-    );
+    ));
     false
 }
 
@@ -47,10 +69,20 @@ fn verilator(test: &str) -> bool {
     if Sim::Verilator.available() {
         return true;
     }
-    println!(
+    skip(&format!(
         "SKIP {test} under Verilator: verilator (with make, g++) not installed (apt-get install -y verilator make g++); Verilator co-simulation not run"
-    );
+    ));
     false
+}
+
+/// Under `IGEMU_REQUIRE_HDL=1` a skip fails its test; without it, it passes.
+#[test]
+fn a_skip_fails_when_the_simulators_are_required() {
+    let line = "SKIP test: iverilog/vvp not installed";
+    let e = std::panic::catch_unwind(|| skip_or_fail(line, true)).unwrap_err();
+    let msg = e.downcast_ref::<String>().expect("a message");
+    assert!(msg.contains(line) && msg.contains(REQUIRE), "{msg}");
+    skip_or_fail(line, false);
 }
 
 /// Verilator builds, shared by all tests and kept between runs (keyed by the testbench,
@@ -344,7 +376,7 @@ fn log_adder_agrees_on_every_pair() {
         }
     }
     if ran == 0 {
-        println!("SKIP log adder on every pair: no simulator installed");
+        skip("SKIP log adder on every pair: no simulator installed");
     }
 }
 
@@ -605,7 +637,7 @@ fn dof_row_mac_refuses_pinhole_scenes_and_wide_accumulators() {
 #[test]
 fn yosys_cell_counts_grow_with_the_widths_and_are_cached() {
     if !hdl::available("yosys") {
-        println!("SKIP yosys synthesis: yosys not installed (apt-get install -y yosys)");
+        skip("SKIP yosys synthesis: yosys not installed (apt-get install -y yosys)");
         return;
     }
     let sc = small_scene();

@@ -57,7 +57,9 @@ pub fn ramp_log(x: &[f64], k: f64, bits: u32, dac_bits: u32, gamma: f64) -> Vec<
         .collect()
 }
 
-/// Emulates the recommended widths of [`crate::analysis::calc::widths`] and one bit narrower in each.
+/// Emulates the recommended widths of [`crate::analysis::calc::widths`] and one bit narrower
+/// in each (a row whose code or DAC would be 0 bits, or wider than 24 code or 16 DAC bits,
+/// is left out).
 pub fn validate_widths(w: &crate::analysis::calc::Widths) -> Vec<RampCheck> {
     let x = ramp(w.contrast);
     let display = DisplayModel {
@@ -96,12 +98,14 @@ pub fn validate_widths(w: &crate::analysis::calc::Widths) -> Vec<RampCheck> {
             disagrees: (contours > 0) == rec,
         });
     };
+    // One bit narrower where there is a narrower width (0 bits has none: `run` skips 0).
+    let less = |b: u32| b.saturating_sub(1);
     run("linear", lb, db, true);
-    run("linear", lb - 1, db, false);
-    run("linear", lb, db - 1, false);
+    run("linear", less(lb), db, false);
+    run("linear", lb, less(db), false);
     run("log", gb, db, true);
-    run("log", gb - 1, db, false);
-    run("log", gb, db - 1, false);
+    run("log", less(gb), db, false);
+    run("log", gb, less(db), false);
     out
 }
 

@@ -5,12 +5,12 @@
 //! digits, word 0 first; a word of several fields holds field 0 in its least significant
 //! bits (the packing of [`super::pack`]). ROMs are always written; a RAM image larger than
 //! [`MAX_RAM_WORDS`] words (the sample buffer of a large region) is listed in the manifest
-//! but not written.
+//! but not written. Every file is written atomically ([`crate::output::write_file`]); the
+//! manifest last.
 
 use crate::error::{Error, Result};
 use crate::stage::{Cost, MemImage, MemKind, StageId};
 use serde::Serialize;
-use std::io::Write;
 use std::path::Path;
 
 /// Largest RAM image written, in words.
@@ -86,6 +86,35 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     }
 }
 
+/// The names of the files [`write`] writes into its folder: the hex files, then
+/// `manifest.json`.
+pub fn files(stages: &[(StageId, &Cost, &[MemImage])]) -> Vec<String> {
+    let mut out: Vec<String> = stages
+        .iter()
+        .flat_map(|&(stage, cost, images)| {
+            images
+                .iter()
+                .filter(|im| written(cost, im))
+                .map(move |im| file_name(stage, &im.name))
+        })
+        .collect();
+    out.push(MANIFEST.into());
+    out
+}
+
+/// The manifest's file name.
+pub const MANIFEST: &str = "manifest.json";
+
+/// Whether an image is written: every ROM, a RAM of at most [`MAX_RAM_WORDS`] words.
+fn written(cost: &Cost, im: &MemImage) -> bool {
+    let kind = cost
+        .memories
+        .iter()
+        .find(|x| x.name == im.name)
+        .map_or(MemKind::Rom, |x| x.kind);
+    kind == MemKind::Rom || im.words <= MAX_RAM_WORDS
+}
+
 /// Writes the images of every stage (`(stage, its cost, its images)`) into `dir` (created
 /// if needed) and `dir/manifest.json`; returns the manifest.
 pub fn write(dir: &Path, stages: &[(StageId, &Cost, &[MemImage])]) -> Result<Manifest> {
@@ -95,12 +124,9 @@ pub fn write(dir: &Path, stages: &[(StageId, &Cost, &[MemImage])]) -> Result<Man
         for im in images {
             let mem = cost.memories.iter().find(|x| x.name == im.name);
             let kind = mem.map_or(MemKind::Rom, |x| x.kind);
-            let write = kind == MemKind::Rom || im.words <= MAX_RAM_WORDS;
-            let file = write.then(|| file_name(stage, &im.name));
+            let file = written(cost, im).then(|| file_name(stage, &im.name));
             if let Some(f) = &file {
-                let path = dir.join(f);
-                let mut out = std::fs::File::create(&path).map_err(io(&path))?;
-                out.write_all(hex(im).as_bytes()).map_err(io(&path))?;
+                crate::output::write_file(dir.join(f), hex(im))?;
             }
             m.memories.push(RomEntry {
                 stage,
@@ -114,8 +140,7 @@ pub fn write(dir: &Path, stages: &[(StageId, &Cost, &[MemImage])]) -> Result<Man
             });
         }
     }
-    let path = dir.join("manifest.json");
     let json = serde_json::to_string_pretty(&m).unwrap_or_default();
-    std::fs::write(&path, json).map_err(io(&path))?;
+    crate::output::write_file(dir.join(MANIFEST), json)?;
     Ok(m)
 }

@@ -46,17 +46,21 @@ impl Bench {
         s
     }
 
-    /// Writes `params.vh`, `vectors.hex` and the ROM files into `dir` (created).
+    /// The names of the files [`Bench::write`] writes: `params.vh`, `vectors.hex`, the ROMs.
+    pub fn files(&self) -> Vec<String> {
+        let mut out = vec!["params.vh".to_string(), "vectors.hex".to_string()];
+        out.extend(self.roms.iter().map(|(name, _)| name.clone()));
+        out
+    }
+
+    /// Writes `params.vh`, `vectors.hex` and the ROM files into `dir` (created), each
+    /// atomically ([`crate::output::write_file`]).
     pub fn write(&self, dir: &Path) -> Result<()> {
-        let io = |p: &Path, e: std::io::Error| Error::Io {
-            path: p.display().to_string(),
+        std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+            path: dir.display().to_string(),
             source: e,
-        };
-        std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
-        let put = |name: &str, text: String| {
-            let p = dir.join(name);
-            std::fs::write(&p, text).map_err(|e| io(&p, e))
-        };
+        })?;
+        let put = |name: &str, text: String| crate::output::write_file(dir.join(name), text);
         put("params.vh", self.params_vh())?;
         let mut v = String::with_capacity(self.vectors.len() * self.fields.len() * 17);
         for row in &self.vectors {

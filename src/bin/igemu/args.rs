@@ -145,6 +145,17 @@ impl From<FilterArg> for FilterKind {
     }
 }
 
+/// A number for a message: plain when it reads well, else in exponent form (`1e308`, not
+/// 309 digits).
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if !v.is_finite() || a == 0.0 || (1e-4..1e7).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// A pixel tap to dump (`render --dump TAP=PATH`): `STAGE` or `STAGE.PLANE` for the stages
 /// whose taps are images ([`igemu::stage::taps::image_planes`]): the frame memory after
 /// accumulate and dof (planes `frame`, `depth`, `coverage`; `frame` by default), the codes

@@ -1,11 +1,16 @@
 //! The `igemu` command line. `main` only maps `try_main`'s result to an exit code:
 //! 0 ok, 1 a check failed, 2 bad input or error (clap's own argument errors exit 2 too).
+//! A closed stdout (`igemu render --json | head -c 10`) ends the program quietly with 0.
 //!
-//! Files: `args.rs` (argument types shared by several commands), `print.rs` (the text
+//! Files: `out.rs` (stdout: `out!`, `outln!`), `guard.rs` (an output never overwrites an
+//! input), `args.rs` (argument types shared by several commands), `print.rs` (the text
 //! reports), `cmd/` (one file per command: its arguments and its run).
+
+mod out;
 
 mod args;
 mod cmd;
+mod guard;
 mod print;
 
 use clap::{Parser, Subcommand};
@@ -50,10 +55,13 @@ enum Cmd {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match try_main(cli) {
+    match try_main(cli).and_then(|code| out::flush().map(|()| code)) {
         Ok(code) => code,
+        // The reader of stdout is gone: nothing more to say, as command-line tools do.
+        Err(e) if out::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("igemu: error: {e}");
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "igemu: error: {e}");
             ExitCode::from(2)
         }
     }

@@ -1,15 +1,17 @@
 //! The text reports of the commands: the render report, the cycle report, the width
 //! validation table, and the work-count list they share.
 
+use crate::out::outln;
 use igemu::analysis::widths::RampCheck;
 use igemu::cycles::CycleReport;
+use igemu::error::Error;
 use igemu::pipeline::Report;
 use std::collections::BTreeMap;
 
 /// Prints the cycle report (plan, per-stage table, frame rate, cost, simulator speed).
-pub fn print_cycles(c: &CycleReport) {
+pub fn print_cycles(c: &CycleReport) -> Result<(), Error> {
     let p = &c.plan;
-    println!(
+    outln!(
         "plan: {} | tiles {}x{} px: {} of {} binned | pixels simulated {} of {} ({:.1}%){}",
         p.stages.join(" -> "),
         p.tile,
@@ -25,7 +27,7 @@ pub fn print_cycles(c: &CycleReport) {
             format!(" | no cycle model: {}", p.unmodelled.join(", "))
         }
     );
-    println!(
+    outln!(
         "{:<11} {:>5} {:>4} {:>3} {:>5} {:>8} {:>12} {:>10} {:>10} {:>10} {:>9}  item",
         "stage",
         "lanes",
@@ -40,7 +42,7 @@ pub fn print_cycles(c: &CycleReport) {
         "fifo max"
     );
     for s in &c.stages {
-        println!(
+        outln!(
             "{:<11} {:>5} {:>4} {:>3} {:>5} {:>8} {:>12} {:>10} {:>10} {:>10} {:>9}  {}",
             s.name,
             s.lanes,
@@ -57,7 +59,7 @@ pub fn print_cycles(c: &CycleReport) {
         );
     }
     let t = &c.throughput;
-    println!(
+    outln!(
         "frame: {} cycles | bottleneck {} | bounds {} <= {} <= {} {} | frame-port-bound cycles {}",
         c.total_cycles,
         c.bottleneck,
@@ -67,7 +69,7 @@ pub fn print_cycles(c: &CycleReport) {
         if c.bounds_hold { "hold" } else { "VIOLATED" },
         c.frame_port_bound_cycles
     );
-    println!(
+    outln!(
         "at {} MHz: {:.3} ms/frame, {:.1} fps, {:.2} Mpixel/s | display needs {} Hz = {:.2} Mpixel/s: {}",
         t.clock_mhz,
         t.frame_ms,
@@ -88,7 +90,7 @@ pub fn print_cycles(c: &CycleReport) {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    println!(
+    outln!(
         "cost: RAM {} bits ({}) | ROM {} bits ({}) | {} adders ({} bits) | {} multipliers ({} bit-products)",
         k.total_storage_bits,
         list(&k.storage_bits),
@@ -107,25 +109,31 @@ pub fn print_cycles(c: &CycleReport) {
             Some(why) => format!("{} MISMATCH ({why})", p.name),
         })
         .collect();
-    println!("packed with bitvec and read back: {}", packed.join(", "));
-    println!(
+    outln!("packed with bitvec and read back: {}", packed.join(", "));
+    outln!(
         "simulator: {} cycles in {:.2} ms = {:.1} M cycles/s",
         c.total_cycles,
         c.sim.wall_ms,
         c.sim.cycles_per_s / 1e6
     );
+    Ok(())
 }
 
 /// Prints the ramp validation of the recommended word widths.
-pub fn print_width_checks(checks: &[RampCheck], weber: f64) {
-    println!(
+pub fn print_width_checks(checks: &[RampCheck], weber: f64) -> Result<(), Error> {
+    outln!(
         "validation by emulation: a {}-sample ramp over the full contrast, quantised and through the gamma LUT;",
         igemu::analysis::widths::RAMP_SAMPLES
     );
-    println!("  contours = adjacent output steps with a luminance ratio above 1 + {weber}");
-    println!(
+    outln!("  contours = adjacent output steps with a luminance ratio above 1 + {weber}");
+    outln!(
         "  {:<7} {:>9} {:>8} {:>12} {:>8} {:>9}  verdict",
-        "coding", "code bits", "DAC bits", "widths", "levels", "contours"
+        "coding",
+        "code bits",
+        "DAC bits",
+        "widths",
+        "levels",
+        "contours"
     );
     for c in checks {
         let verdict = match (c.recommended, c.disagrees) {
@@ -134,7 +142,7 @@ pub fn print_width_checks(checks: &[RampCheck], weber: f64) {
             (true, true) => "DISAGREES with theory: contours at the recommended widths",
             (false, true) => "DISAGREES with theory: no visible contour one bit narrower",
         };
-        println!(
+        outln!(
             "  {:<7} {:>9} {:>8} {:>12} {:>8} {:>9}  {verdict}",
             c.coding,
             c.code_bits,
@@ -148,6 +156,7 @@ pub fn print_width_checks(checks: &[RampCheck], weber: f64) {
             c.contours
         );
     }
+    Ok(())
 }
 
 /// The non-zero work counts, `name count` comma separated.
@@ -160,9 +169,9 @@ fn fmt_work(w: &BTreeMap<String, u64>) -> String {
 }
 
 /// Prints the render report; `out` is the image written.
-pub fn print_report(r: &Report, out: &str) {
+pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
     let p = &r.plan;
-    println!(
+    outln!(
         "igemu {} | scene `{}` {}x{} | hardware `{}` | {} threads",
         r.igemu_version,
         r.scene.name,
@@ -171,7 +180,7 @@ pub fn print_report(r: &Report, out: &str) {
         r.hardware.name,
         r.timing.threads
     );
-    println!(
+    outln!(
         "plan: {} | region x {}..{} y {}..{} ({:.1}% of the screen) | tiles {}x{} px: {} binned | {}x{} samples/pixel | gamma {}",
         p.stages.join(" -> "),
         p.region.x0,
@@ -187,7 +196,7 @@ pub fn print_report(r: &Report, out: &str) {
         p.gamma
     );
     for d in &p.decisions {
-        println!(
+        outln!(
             "  {:<11} {:<3}  {}",
             d.stage.name(),
             if d.need.planned { "in" } else { "out" },
@@ -195,12 +204,17 @@ pub fn print_report(r: &Report, out: &str) {
         );
     }
     if !r.reused.is_empty() {
-        println!("reused from the cache: {}", r.reused.join(", "));
+        outln!("reused from the cache: {}", r.reused.join(", "));
     }
-    println!();
-    println!(
+    outln!();
+    outln!(
         "{:<11} {:>9} {:>9}  {:>10} {:>10} {:>9}  work",
-        "stage", "fixed ms", "float ms", "max|err|", "mean err", "overflow"
+        "stage",
+        "fixed ms",
+        "float ms",
+        "max|err|",
+        "mean err",
+        "overflow"
     );
     for s in &r.stages {
         let (me, mean) = s.local.as_ref().map_or(("-".into(), "-".into()), |l| {
@@ -210,7 +224,7 @@ pub fn print_report(r: &Report, out: &str) {
             )
         });
         let ov: u64 = s.signals.iter().map(|x| x.overflows).sum();
-        println!(
+        outln!(
             "{:<11} {:>9.2} {:>9.2}  {:>10} {:>10} {:>9}  {}",
             s.name,
             s.fixed_ms,
@@ -221,18 +235,21 @@ pub fn print_report(r: &Report, out: &str) {
             fmt_work(&s.work)
         );
     }
-    println!(
+    outln!(
         "{:<11} {:>9.2} {:>9.2}  (host front end {:.2} ms, f64, shared)",
-        "total", r.timing.fixed_ms, r.timing.float_ms, r.timing.host_ms
+        "total",
+        r.timing.fixed_ms,
+        r.timing.float_ms,
+        r.timing.host_ms
     );
     let c = &r.end_to_end.codes;
     let w = &r.end_to_end.weber;
-    println!();
-    println!(
+    outln!();
+    outln!(
         "end to end, DAC codes ({} bits), fixed vs float reference:",
         r.hardware.gamma.dac_bits
     );
-    println!(
+    outln!(
         "  identical {:.4}% | max |diff| {} | mean diff {:+.5} | PSNR {}",
         100.0 * c.identical_fraction,
         c.max_abs_diff,
@@ -245,8 +262,8 @@ pub fn print_report(r: &Report, out: &str) {
         .iter()
         .map(|(d, n)| format!("{d:+}: {n}"))
         .collect();
-    println!("  histogram of differences: {}", hist.join(", "));
-    println!(
+    outln!("  histogram of differences: {}", hist.join(", "));
+    outln!(
         "  luminance (display model): max Weber {:.4} | mean {:.6} | visible (> {}) {} px ({:.4}%)",
         w.max,
         w.mean,
@@ -255,7 +272,7 @@ pub fn print_report(r: &Report, out: &str) {
         100.0 * w.over_delta_fraction
     );
     let k = &r.contours;
-    println!(
+    outln!(
         "  visible contours (smooth regions, window {}x{} px per side, delta {}): {} steps ({} px) | float reference: {} steps | smooth steps {}",
         k.window[0],
         k.window[1],
@@ -270,19 +287,23 @@ pub fn print_report(r: &Report, out: &str) {
         .iter()
         .find_map(|s| s.notes.get("temporal_period_mean"))
     {
-        println!(
+        outln!(
             "  temporal dither: static frame over a period of {} frames: {} of {} pixels average exactly to their input (max |error| {} LSB)",
-            pm["period"], pm["exact_pixels"], pm["pixels"], pm["max_abs_error"]
+            pm["period"],
+            pm["exact_pixels"],
+            pm["pixels"],
+            pm["max_abs_error"]
         );
     }
-    println!(
+    outln!(
         "cost: storage {} bits ({:.1} KiB), LUT/ROM {} bits | overflows {}",
         r.storage_bits,
         r.storage_bits as f64 / 8192.0,
         r.lut_bits,
         r.overflows
     );
-    println!();
-    print_cycles(&r.cycles);
-    println!("wrote {out}");
+    outln!();
+    print_cycles(&r.cycles)?;
+    outln!("wrote {out}");
+    Ok(())
 }

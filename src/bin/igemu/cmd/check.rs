@@ -2,6 +2,7 @@
 //! code differences or the visible error fails.
 
 use crate::args::{SceneArgs, arg_error};
+use crate::out::outln;
 use clap::Args;
 use igemu::error::Error;
 use igemu::stage::RunOptions;
@@ -15,10 +16,10 @@ pub struct CheckArgs {
     #[arg(long)]
     pub max_code_diff: Option<u32>,
     /// Fail when the fraction of identical DAC codes is below F (0..=1).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub min_identical: Option<f64>,
-    /// Fail when more than this fraction of pixels has a visible (over delta) Weber error.
-    #[arg(long)]
+    /// Fail when more than this fraction of pixels has a visible (over delta) Weber error (0..=1).
+    #[arg(long, allow_negative_numbers = true)]
     pub max_visible: Option<f64>,
     /// Print the verdict as JSON.
     #[arg(long)]
@@ -27,13 +28,18 @@ pub struct CheckArgs {
 
 /// Runs `igemu check`; returns the exit code.
 pub fn run(a: CheckArgs) -> Result<ExitCode, Error> {
-    if let Some(f) = a.min_identical
-        && !(0.0..=1.0).contains(&f)
-    {
-        return Err(arg_error(
-            "--min-identical",
-            format!("must be in 0..=1, got {f}"),
-        ));
+    for (flag, v) in [
+        ("--min-identical", a.min_identical),
+        ("--max-visible", a.max_visible),
+    ] {
+        if let Some(f) = v
+            && !(f.is_finite() && (0.0..=1.0).contains(&f))
+        {
+            return Err(arg_error(
+                flag,
+                format!("must be a fraction in 0..=1, got {f}"),
+            ));
+        }
     }
     let r = a.s.render(RunOptions::FAST)?;
     let c = &r.report.end_to_end.codes;
@@ -68,12 +74,12 @@ pub fn run(a: CheckArgs) -> Result<ExitCode, Error> {
             "identical_fraction": c.identical_fraction,
             "visible_fraction": wv.over_delta_fraction,
         });
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&v).expect("serialisable")
         );
     } else if failed.is_empty() {
-        println!(
+        outln!(
             "check passed: max |code diff| {}, identical {:.4}%, visible {:.4}%",
             c.max_abs_diff,
             100.0 * c.identical_fraction,
@@ -81,7 +87,7 @@ pub fn run(a: CheckArgs) -> Result<ExitCode, Error> {
         );
     } else {
         for f in &failed {
-            println!("check FAILED: {f}");
+            outln!("check FAILED: {f}");
         }
     }
     Ok(if failed.is_empty() {

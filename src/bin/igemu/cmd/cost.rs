@@ -2,6 +2,7 @@
 //! cell counts of the HDL models at the configured widths.
 
 use crate::args::SceneArgs;
+use crate::out::outln;
 use clap::Args;
 use igemu::error::Error;
 use igemu::hdl;
@@ -24,7 +25,7 @@ pub fn run(a: CostArgs) -> Result<ExitCode, Error> {
     let scene = a.s.scene()?;
     let hw = a.s.hw()?;
     let r = pipeline::render(&scene, &hw, RunOptions::FAST)?;
-    println!(
+    outln!(
         "cost | hardware `{}` | scene `{}`{}",
         hw.name,
         scene.name,
@@ -34,9 +35,13 @@ pub fn run(a: CostArgs) -> Result<ExitCode, Error> {
             ""
         }
     );
-    println!(
+    outln!(
         "{:<11} {:>12} {:>10} {:>7} {:>6}  HDL model: yosys cells (flip-flops)",
-        "stage", "storage_bits", "lut_bits", "adders", "mults"
+        "stage",
+        "storage_bits",
+        "lut_bits",
+        "adders",
+        "mults"
     );
     let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("target")
@@ -62,9 +67,13 @@ pub fn run(a: CostArgs) -> Result<ExitCode, Error> {
             Some((_, m)) => format!("{m} (use --synth)"),
             None => "-".into(),
         };
-        println!(
+        outln!(
             "{:<11} {:>12} {:>10} {:>7} {:>6}  {synth}",
-            st.name, c.storage_bits, c.lut_bits, adders, mults
+            st.name,
+            c.storage_bits,
+            c.lut_bits,
+            adders,
+            mults
         );
     }
     Ok(ExitCode::SUCCESS)

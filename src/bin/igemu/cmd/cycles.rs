@@ -1,7 +1,10 @@
 //! `igemu cycles`: cycle-count a frame on the scene's real workload, optionally writing a
-//! VCD trace of the stage states and FIFO occupancy.
+//! VCD trace of the stage states and FIFO occupancy (streamed to a temporary file renamed
+//! over `--vcd` at the end).
 
 use crate::args::{SceneArgs, arg_error};
+use crate::guard::Inputs;
+use crate::out::outln;
 use crate::print::print_cycles;
 use clap::Args;
 use igemu::error::Error;
@@ -14,7 +17,7 @@ pub struct CyclesArgs {
     #[command(flatten)]
     pub s: SceneArgs,
     /// Clock frequency in MHz (default: the hardware file's cycles.clock_mhz).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub clock_mhz: Option<f64>,
     /// Write a VCD trace of stage states and FIFO occupancy (for GTKWave).
     #[arg(long)]
@@ -27,6 +30,9 @@ pub struct CyclesArgs {
 /// Runs `igemu cycles`; returns the exit code.
 pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
     use igemu::cycles::{self, vcd::VcdWriter};
+    if let Some(p) = &a.vcd {
+        Inputs::of(&a.s).check("--vcd", p)?;
+    }
     let scene = a.s.scene()?;
     let mut hw = a.s.hw()?;
     if let Some(mhz) = a.clock_mhz {
@@ -40,13 +46,8 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
             path: path.clone(),
             source: e,
         };
-        let file = std::fs::File::create(path).map_err(io)?;
-        let mut w = VcdWriter::new(
-            std::io::BufWriter::new(file),
-            &r.workload,
-            hw.cycles.clock_mhz,
-        )
-        .map_err(io)?;
+        let file = igemu::output::AtomicFile::create(path)?;
+        let mut w = VcdWriter::new(file, &r.workload, hw.cycles.clock_mhz).map_err(io)?;
         let t = std::time::Instant::now();
         let sim = cycles::simulate(
             &r.workload,
@@ -62,15 +63,15 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
             &sim,
             wall,
         );
-        w.finish(c.total_cycles).map_err(io)?;
+        w.finish(c.total_cycles).map_err(io)?.commit()?;
     }
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&c).expect("serialisable")
         );
     } else {
-        println!(
+        outln!(
             "igemu {} cycles | scene `{}` {}x{} | hardware `{}`",
             r.report.igemu_version,
             r.report.scene.name,
@@ -78,9 +79,9 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
             r.report.scene.height,
             r.report.hardware.name
         );
-        print_cycles(&c);
+        print_cycles(&c)?;
         if let Some(p) = &a.vcd {
-            println!("wrote {p}");
+            outln!("wrote {p}");
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -2,6 +2,7 @@
 //! sub-pixel phases.
 
 use crate::args::{FilterArg, arg_error};
+use crate::out::outln;
 use clap::Args;
 use igemu::config::HwConfig;
 use igemu::error::Error;
@@ -43,13 +44,13 @@ pub fn run(a: FlickerArgs) -> Result<ExitCode, Error> {
     }
     let r = igemu::analysis::flicker::flicker(&hw, a.phases)?;
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&r).expect("serialisable")
         );
         return Ok(ExitCode::SUCCESS);
     }
-    println!(
+    outln!(
         "flicker | hardware `{}` | filter {:?} | gamma {} {} | {}x{} phases on a {}x{} px scene",
         r.hardware,
         r.filter,
@@ -65,28 +66,31 @@ pub fn run(a: FlickerArgs) -> Result<ExitCode, Error> {
         r.scene_size
     );
     for o in &r.objects {
-        println!("{} ({}):", o.object, o.description);
-        println!(
+        outln!("{} ({}):", o.object, o.description);
+        outln!(
             "  accumulator sum ripple        {} LSB ({:.4}% of the mean)",
-            o.acc_ripple_lsb, o.acc_ripple_pct
+            o.acc_ripple_lsb,
+            o.acc_ripple_pct
         );
-        println!(
+        outln!(
             "  displayed luminance ripple    {:.3}% peak to peak of the mean ({:.3} cd/m2 summed)",
-            o.displayed_ripple_pct, o.mean_luminance
+            o.displayed_ripple_pct,
+            o.mean_luminance
         );
-        println!(
+        outln!(
             "  peak-pixel modulation         {:.2}%",
             o.peak_pixel_modulation_pct
         );
-        println!(
+        outln!(
             "  split 50/50 over two pixels   {:+.2}% brightness vs the pixel-aligned phase",
             o.half_pixel_brightness_error_pct
         );
     }
     if !r.gamma_correction {
-        println!(
+        outln!(
             "analytic split error without correction: 2 (1/2)^{} - 1 = {:+.2}%",
-            r.gamma, r.analytic_split_error_pct
+            r.gamma,
+            r.analytic_split_error_pct
         );
     }
     Ok(ExitCode::SUCCESS)

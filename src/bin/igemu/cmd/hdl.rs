@@ -3,6 +3,8 @@
 //! `--exhaustive`, the log adder's full pair space).
 
 use crate::args::{SceneArgs, SimArg, StageArg, arg_error};
+use crate::guard::Inputs;
+use crate::out::outln;
 use clap::{Args, Subcommand};
 use igemu::config::HwConfig;
 use igemu::error::Error;
@@ -58,11 +60,14 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
             "only the log adder (--stage logdomain) has an exhaustive testbench".into(),
         ));
     }
-    let b = hdl::vectors(a.stage.0, &scene, &hw)?;
+    let inputs = Inputs::of(&a.s);
     let dir = Path::new(&a.out);
+    inputs.check_in("--out", dir, ["params.vh", "vectors.hex"])?;
+    let b = hdl::vectors(a.stage.0, &scene, &hw)?;
+    inputs.check_in("--out", dir, b.files())?;
     b.write(dir)?;
     let src: Vec<String> = b.sources.iter().map(|(k, n)| format!("{n} {k}")).collect();
-    println!(
+    outln!(
         "hdl vectors | stage {} (module {}) | hardware `{}` | {} vectors ({}) | {}",
         b.stage,
         b.module,
@@ -72,7 +77,7 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
         dir.display()
     );
     let params: Vec<String> = b.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
-    println!("parameters: {}", params.join(" "));
+    outln!("parameters: {}", params.join(" "));
     if !a.run {
         return Ok(ExitCode::SUCCESS);
     }
@@ -80,7 +85,7 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
         .join("target")
         .join("hdl-verilator");
     if a.exhaustive {
-        return run_exhaustive(sim, &b, dir, &cache, &scene, &hw);
+        return run_exhaustive(sim, &b, dir, &cache, &scene, &hw, &inputs);
     }
     let tb = format!("tb_{}", b.module);
     let r = sim
@@ -90,7 +95,7 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
         Verdict::Ok(n) => {
             let rust = n as f64 / (b.model_ns.max(1) as f64 * 1e-9);
             let sim_rate = n as f64 / r.sim_s;
-            println!(
+            outln!(
                 "{}: TESTBENCH OK {n} vectors | compile {:.2} s, simulate {:.3} s = {sim_rate:.0} vectors/s | Rust model {:.3} ms = {rust:.0} vectors/s | Rust / Verilog = {:.0}x",
                 sim.name(),
                 r.compile_s,
@@ -101,7 +106,7 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
             Ok(ExitCode::SUCCESS)
         }
         Verdict::Failed(m) => {
-            println!("{}: TESTBENCH FAILED: {m}", sim.name());
+            outln!("{}: TESTBENCH FAILED: {m}", sim.name());
             Ok(ExitCode::from(1))
         }
     }
@@ -116,13 +121,14 @@ fn run_exhaustive(
     cache: &Path,
     scene: &Scene,
     hw: &HwConfig,
+    inputs: &Inputs,
 ) -> Result<ExitCode, Error> {
     let r = sim
         .run(exhaustive::TESTBENCH, b.module, dir, cache)
         .map_err(|m| arg_error("--run", m))?;
     match r.verdict {
         Verdict::Ok(n) => {
-            println!(
+            outln!(
                 "{}: {}: TESTBENCH OK {n} vectors (every pair) | compile {:.2} s, simulate {:.2} s = {:.0} vectors/s",
                 sim.name(),
                 exhaustive::TESTBENCH,
@@ -133,7 +139,7 @@ fn run_exhaustive(
             Ok(ExitCode::SUCCESS)
         }
         Verdict::Failed(m) => {
-            println!(
+            outln!(
                 "{}: {}: TESTBENCH FAILED: {m}",
                 sim.name(),
                 exhaustive::TESTBENCH
@@ -141,6 +147,7 @@ fn run_exhaustive(
             if let Some(row) = exhaustive::failed_row(&m) {
                 let rb = exhaustive::row_bench(scene, hw, row)?;
                 let rdir = dir.join(format!("row-{row}"));
+                inputs.check_in("--out", &rdir, rb.files())?;
                 rb.write(&rdir)?;
                 let rr = sim
                     .run(&format!("tb_{}", rb.module), rb.module, &rdir, cache)
@@ -149,7 +156,7 @@ fn run_exhaustive(
                     Verdict::Ok(n) => format!("TESTBENCH OK {n} vectors"),
                     Verdict::Failed(m) => format!("TESTBENCH FAILED: {m}"),
                 };
-                println!("row a={row} pair by pair ({}): {v}", rdir.display());
+                outln!("row a={row} pair by pair ({}): {v}", rdir.display());
             }
             Ok(ExitCode::from(1))
         }

@@ -2,6 +2,7 @@
 //! with `--export` the configuration's formats as ac_fixed, ap_fixed, SystemC or Verilog.
 
 use crate::args::{ExportArg, SceneArgs};
+use crate::out::{out, outln};
 use clap::Args;
 use igemu::analysis::ranges;
 use igemu::error::Error;
@@ -24,25 +25,31 @@ pub struct RangesArgs {
 pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
     if let Some(e) = a.export {
         let hw = a.s.hw()?;
-        print!("{}", ranges::export(&hw, e.into()));
+        out!("{}", ranges::export(&hw, e.into()));
         return Ok(ExitCode::SUCCESS);
     }
     let r = a.s.render(RunOptions::FAST)?;
     let rows = ranges::ranges(&r.report.stages);
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&rows).expect("serialisable")
         );
         return Ok(ExitCode::SUCCESS);
     }
-    println!(
+    outln!(
         "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
-        "stage", "signal", "format", "min (LSB)", "max (LSB)", "narrowest", "overflows"
+        "stage",
+        "signal",
+        "format",
+        "min (LSB)",
+        "max (LSB)",
+        "narrowest",
+        "overflows"
     );
     for s in rows {
         let opt = |v: Option<i128>| v.map_or("-".to_string(), |v| v.to_string());
-        println!(
+        outln!(
             "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
             s.stage,
             s.signal,

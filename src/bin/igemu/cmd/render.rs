@@ -1,8 +1,11 @@
 //! `igemu render`: render a scene through the fixed-point pipeline and the float
 //! reference; write the image, the optional reference, difference, banding and stage dumps,
-//! and the report (text, JSON on stdout or a JSON file).
+//! and the report (text, JSON on stdout or a JSON file). Every file is written atomically
+//! ([`igemu::output::AtomicFile`]); no output may be an input.
 
 use crate::args::{DumpTap, SceneArgs, arg_error, parse_dump};
+use crate::guard::Inputs;
+use crate::out::outln;
 use crate::print::print_report;
 use clap::Args;
 use igemu::error::Error;
@@ -49,6 +52,25 @@ pub struct RenderArgs {
 
 /// Runs `igemu render`; returns the exit code.
 pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
+    let inputs = Inputs::of(&a.s);
+    inputs.check("--out", &a.out)?;
+    for (flag, p) in [
+        ("--reference-out", &a.reference_out),
+        ("--diff-out", &a.diff_out),
+        ("--banding-out", &a.banding_out),
+        ("--report", &a.report),
+    ] {
+        if let Some(p) = p {
+            inputs.check(flag, p)?;
+        }
+    }
+    for (_, p) in &a.dump {
+        inputs.check("--dump", p)?;
+    }
+    let rom_dir = a.rom_out.as_deref().map(std::path::Path::new);
+    if let Some(dir) = rom_dir {
+        inputs.check_in("--rom-out", dir, [igemu::cost::rom::MANIFEST])?;
+    }
     let r = pipeline::render(
         &a.s.scene()?,
         &a.s.hw()?,
@@ -59,6 +81,15 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         },
     )?;
     let (w, h) = (r.report.scene.width, r.report.scene.height);
+    let stages: Vec<_> = r
+        .steps
+        .iter()
+        .map(|s| (s.id, &s.outcome.report.cost, s.outcome.images.as_slice()))
+        .collect();
+    if let Some(dir) = rom_dir {
+        // The hex files' names are known once the plan has run: checked before any write.
+        inputs.check_in("--rom-out", dir, igemu::cost::rom::files(&stages))?;
+    }
     output::write_dac(&a.out, &r.dac, w, h, r.dac_bits)?;
     if let Some(p) = &a.reference_out {
         output::write_dac(p, &r.dac_ref, w, h, r.dac_bits)?;
@@ -91,25 +122,17 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
             .expect("the planes of a stage are on its taps");
         output::write_raw16(path, &codes, w, h)?;
     }
-    if let Some(dir) = &a.rom_out {
-        let stages: Vec<_> = r
-            .steps
-            .iter()
-            .map(|s| (s.id, &s.outcome.report.cost, s.outcome.images.as_slice()))
-            .collect();
-        igemu::cost::rom::write(std::path::Path::new(dir), &stages)?;
+    if let Some(dir) = rom_dir {
+        igemu::cost::rom::write(dir, &stages)?;
     }
     let json = serde_json::to_string_pretty(&r.report).expect("serialisable");
     if let Some(p) = &a.report {
-        std::fs::write(p, &json).map_err(|e| Error::Io {
-            path: p.clone(),
-            source: e,
-        })?;
+        output::write_file(p, &json)?;
     }
     if a.json {
-        println!("{json}");
+        outln!("{json}");
     } else {
-        print_report(&r.report, &a.out);
+        print_report(&r.report, &a.out)?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -2,6 +2,8 @@
 //! line each (resumable, shardable, parallel), and print the Pareto front.
 
 use crate::args::{arg_error, load_scene};
+use crate::guard::Inputs;
+use crate::out::{out, outln};
 use clap::Args;
 use igemu::error::Error;
 use igemu::pipeline;
@@ -45,6 +47,15 @@ pub struct SweepArgs {
 pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     use igemu::sweep::{self, grid, pareto};
     // Everything is checked before the first render.
+    let mut inputs = Inputs::default();
+    inputs.add("the grid file (--grid)", Some(&a.grid));
+    for s in &a.scenes {
+        inputs.add("a scene file", Some(s));
+    }
+    inputs.check("--out", &a.out)?;
+    if let Some(p) = &a.plot {
+        inputs.check("--plot", p)?;
+    }
     let shard = match &a.shard {
         Some(s) => Some(grid::Shard::parse(s).map_err(|m| arg_error("--shard", m))?),
         None => None,
@@ -141,7 +152,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         sweep::plot::write(rows, axes[0], p)?;
     }
     let front = pareto::front(rows, &axes);
-    println!(
+    outln!(
         "Pareto front on {} ({} of {} rows):",
         axes.iter()
             .map(|x| x.name())
@@ -150,19 +161,19 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         front.len(),
         rows.len()
     );
-    print!("  {:>5}  {:<16}", "index", "scene");
+    out!("  {:>5}  {:<16}", "index", "scene");
     for x in &axes {
-        print!("  {:>18}", x.name());
+        out!("  {:>18}", x.name());
     }
-    println!("  configuration");
+    outln!("  configuration");
     for &i in &front {
         let r = &rows[i];
-        print!("  {:>5}  {:<16}", r.index, r.scene);
+        out!("  {:>5}  {:<16}", r.index, r.scene);
         for x in &axes {
-            print!("  {:>18.4}", x.value(r));
+            out!("  {:>18.4}", x.value(r));
         }
         let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
-        println!("  {}", cfg.join(" "));
+        outln!("  {}", cfg.join(" "));
     }
     Ok(ExitCode::SUCCESS)
 }

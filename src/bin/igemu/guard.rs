@@ -1,0 +1,66 @@
+//! An output never overwrites an input: each command collects its input files (scene
+//! files, the `--hw` file, the `--grid` file) by canonical path and checks every output
+//! path against them before any work. An output that does not exist yet cannot be an
+//! input; a symbolic link or a `..` path to an input is the input.
+
+use crate::args::{SceneArgs, arg_error};
+use igemu::error::Error;
+use std::path::{Path, PathBuf};
+
+/// The input files of a command: (what it is, canonical path).
+#[derive(Default)]
+pub struct Inputs(Vec<(String, PathBuf)>);
+
+impl Inputs {
+    /// The scene file and the `--hw` file of `s` (a preset or an embedded scene name is no
+    /// file).
+    pub fn of(s: &SceneArgs) -> Inputs {
+        let mut i = Inputs::default();
+        i.add("the scene file", s.scene.as_deref());
+        i.add("the hardware file (--hw)", s.hw.as_deref());
+        i
+    }
+
+    /// Adds `path` as `what` when it names an existing file.
+    pub fn add(&mut self, what: &str, path: Option<&str>) {
+        if let Some(c) = path.and_then(|p| std::fs::canonicalize(p).ok())
+            && c.is_file()
+        {
+            self.0.push((what.into(), c));
+        }
+    }
+
+    /// Refuses `out` (the value of `flag`) when it is one of the inputs.
+    pub fn check(&self, flag: &str, out: &str) -> Result<(), Error> {
+        self.check_path(flag, out, Path::new(out))
+    }
+
+    /// Refuses any of `names` in the folder `dir` (the value of `flag`) that is an input.
+    pub fn check_in<S: AsRef<str>>(
+        &self,
+        flag: &str,
+        dir: &Path,
+        names: impl IntoIterator<Item = S>,
+    ) -> Result<(), Error> {
+        for n in names {
+            let p = dir.join(n.as_ref());
+            self.check_path(flag, &p.display().to_string(), &p)?;
+        }
+        Ok(())
+    }
+
+    fn check_path(&self, flag: &str, shown: &str, out: &Path) -> Result<(), Error> {
+        let Ok(c) = std::fs::canonicalize(out) else {
+            return Ok(());
+        };
+        match self.0.iter().find(|(_, p)| *p == c) {
+            Some((what, _)) => Err(arg_error(
+                flag,
+                format!(
+                    "{shown} is {what}; choose another path (an output never overwrites an input)"
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+}
