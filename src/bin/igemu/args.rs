@@ -21,6 +21,9 @@ pub struct SceneArgs {
     /// Hardware config: a preset (linear12, linear11, linear8, log8-potentiate, log8-logadd, log7-logadd) or a TOML file.
     #[arg(long)]
     pub hw: Option<String>,
+    /// Refuse a render whose memory estimate exceeds SIZE (bytes, or with K, M, G, T: 512M, 8G; default half the machine's memory).
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 impl SceneArgs {
@@ -34,12 +37,44 @@ impl SceneArgs {
         Ok(HwConfig::resolve(self.hw.as_deref())?)
     }
 
+    /// `opts` with the memory limit of `--max-memory`.
+    pub fn opts(&self, opts: RunOptions) -> RunOptions {
+        RunOptions {
+            max_memory: self.max_memory.or(opts.max_memory),
+            ..opts
+        }
+    }
+
     /// Renders the scene on the hardware.
     pub fn render(&self, opts: RunOptions) -> Result<Render, Error> {
         let scene = self.scene()?;
         let hw = self.hw()?;
-        pipeline::render(&scene, &hw, opts)
+        pipeline::render(&scene, &hw, self.opts(opts))
     }
+}
+
+/// Parses a size: bytes, or a number with `K`, `M`, `G` or `T` (binary units; an optional
+/// `i` and `B` are accepted: `512M`, `8GiB`, `1.5G`).
+pub fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let upper = t.to_ascii_uppercase();
+    let u = upper.trim_end_matches('B').trim_end_matches('I');
+    let (num, shift) = match u.chars().last() {
+        Some('K') => (&u[..u.len() - 1], 10),
+        Some('M') => (&u[..u.len() - 1], 20),
+        Some('G') => (&u[..u.len() - 1], 30),
+        Some('T') => (&u[..u.len() - 1], 40),
+        _ => (u, 0),
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a size (bytes, or a number with K, M, G or T, e.g. 512M or 8G)"))?;
+    let bytes = v * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < 2f64.powi(63)) {
+        return Err(format!("`{s}` must be at least 1 byte and below 8 EiB"));
+    }
+    Ok(bytes as u64)
 }
 
 /// A scene: the default scene, an embedded scene name (unless a file of that name exists)

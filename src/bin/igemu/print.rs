@@ -203,6 +203,9 @@ pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
             d.need.reason
         );
     }
+    for n in &p.notes {
+        outln!("  note: {n}");
+    }
     if !r.reused.is_empty() {
         outln!("reused from the cache: {}", r.reused.join(", "));
     }

@@ -24,7 +24,7 @@ pub struct CostArgs {
 pub fn run(a: CostArgs) -> Result<ExitCode, Error> {
     let scene = a.s.scene()?;
     let hw = a.s.hw()?;
-    let r = pipeline::render(&scene, &hw, RunOptions::FAST)?;
+    let r = pipeline::render(&scene, &hw, a.s.opts(RunOptions::FAST))?;
     outln!(
         "cost | hardware `{}` | scene `{}`{}",
         hw.name,

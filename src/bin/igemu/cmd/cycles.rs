@@ -39,7 +39,7 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
         igemu::config::check_clock(mhz).map_err(|m| arg_error("--clock-mhz", m))?;
         hw.cycles.clock_mhz = mhz;
     }
-    let r = pipeline::render(&scene, &hw, RunOptions::FAST)?;
+    let r = pipeline::render(&scene, &hw, a.s.opts(RunOptions::FAST))?;
     let mut c = r.report.cycles.clone();
     if let Some(path) = &a.vcd {
         let io = |e: std::io::Error| Error::Io {

@@ -74,11 +74,11 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
     let r = pipeline::render(
         &a.s.scene()?,
         &a.s.hw()?,
-        RunOptions {
+        a.s.opts(RunOptions {
             stage_local: !a.no_local,
             dof_reference: a.dof_reference,
             ..RunOptions::default()
-        },
+        }),
     )?;
     let (w, h) = (r.report.scene.width, r.report.scene.height);
     let stages: Vec<_> = r
