@@ -15,6 +15,13 @@ fn tmp(name: &str) -> PathBuf {
 
 /// A small scene file: a shaded triangle, a line and a light point on 160x120.
 fn scene_file(dir: &std::path::Path) -> String {
+    let p = dir.join("small.toml");
+    std::fs::write(&p, scene_text(0.02)).expect("write scene");
+    p.to_string_lossy().into_owned()
+}
+
+/// The text of [`scene_file`] with the given background.
+fn scene_text(background: f64) -> String {
     let objects = [
         common::tri(
             [[10.0, 10.0, 0.3], [150.0, 20.0, 0.5], [40.0, 110.0, 0.7]],
@@ -24,14 +31,11 @@ fn scene_file(dir: &std::path::Path) -> String {
         common::point(80.0, 30.0, 0.1, 1.0, 2.0),
     ]
     .concat();
-    let text = format!(
-        "[image]\nwidth = 160\nheight = 120\nbackground = 0.02\n\n\
+    format!(
+        "[image]\nwidth = 160\nheight = 120\nbackground = {background:?}\n\n\
          [camera]\nposition = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nfov_y_deg = 40.0\nnear = 1.0\nfar = 100.0\n\n\
          [display]\ncontrast = 100.0\ngamma = 2.4\nweber = 0.02\nb_max = 100.0\n\n{objects}"
-    );
-    let p = dir.join("small.toml");
-    std::fs::write(&p, text).expect("write scene");
-    p.to_string_lossy().into_owned()
+    )
 }
 
 fn grid_file(dir: &std::path::Path, name: &str, text: &str) -> String {
@@ -48,8 +52,8 @@ fn igemu(args: &[&str]) -> Output {
 }
 
 fn rows(path: &str) -> Vec<serde_json::Value> {
-    let (rows, dropped) = sweep::read_rows(path).expect("read rows");
-    assert!(!dropped, "{path} has a partial line");
+    let (rows, skipped) = sweep::read_rows(path).expect("read rows");
+    assert_eq!(skipped, 0, "{path} has a partial line");
     rows.iter().map(sweep::without_timing).collect()
 }
 
@@ -76,8 +80,9 @@ fn expansion_is_ordered_last_field_fastest_and_validated() {
     // The vertex intensity follows the accumulator, as in a hardware file.
     assert_eq!(c[0].hw.input.intensity.format.int_bits, 10);
     // Ids are stable (FNV-1a) and distinct.
+    let scene = igemu::scene::Scene::default_scene();
     let ids: std::collections::BTreeSet<String> =
-        c.iter().map(|c| sweep::row_id("s", &c.canonical)).collect();
+        c.iter().map(|c| sweep::row_id(&scene, &c.hw)).collect();
     assert_eq!(ids.len(), 6);
     assert_eq!(igemu::fnv::fnv1a(b""), 0xcbf2_9ce4_8422_2325);
     assert_eq!(igemu::fnv::fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
@@ -218,19 +223,21 @@ fn a_killed_sweep_resumes_to_the_uninterrupted_result() {
     let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out, "--resume"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert!(
-        err.contains(&format!("{} kept", before.len())),
-        "reuses the completed rows: {err}"
-    );
+    // The completed rows are reused as they were (their timing included), not recomputed.
+    let (after, skipped) = sweep::read_rows(&out).unwrap();
+    assert_eq!(skipped, 0);
+    for r in &before {
+        assert!(after.contains(r), "row {} was kept: {err}", r.index);
+    }
     let resumed = rows(&out);
     let ids: std::collections::BTreeSet<&str> =
         resumed.iter().map(|r| r["id"].as_str().unwrap()).collect();
     assert_eq!(ids.len(), 40, "every configuration exactly once");
     assert_eq!(resumed, full_rows);
-    // Resuming a complete file computes nothing.
+    // Resuming a complete file computes nothing: every row is kept as it was.
     let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out, "--resume"]);
-    assert!(String::from_utf8_lossy(&o.stderr).contains("40 kept"));
-    assert_eq!(rows(&out), full_rows);
+    assert!(o.status.success());
+    assert_eq!(sweep::read_rows(&out).unwrap(), (after, 0));
 }
 
 #[test]
@@ -497,4 +504,361 @@ fn a_timing_sweep_reuses_every_stage_and_reruns_only_the_cycle_model() {
     }
     // The cycle model ran for each timing: four lanes are slower than sixteen.
     assert!(rows[0].cycles.total_cycles > rows[2].cycles.total_cycles);
+}
+
+fn expand(text: &str) -> Vec<grid::Config> {
+    let f = TomlFile::from_text("g.toml", text);
+    grid::Grid::parse(&f).unwrap().expand(&f).unwrap()
+}
+
+/// Runs `configs` on `scenes` into `out` through the library (serial, no stage reuse).
+fn run_lib(
+    out: &str,
+    configs: &[grid::Config],
+    scenes: &[igemu::scene::Scene],
+    resume: bool,
+) -> sweep::SweepSummary {
+    let opts = sweep::SweepOptions {
+        out,
+        resume,
+        shard: None,
+        jobs: 1,
+        cache: None,
+        flicker: None,
+    };
+    sweep::run(configs, scenes, &opts, &|_, _| {}).unwrap()
+}
+
+fn counts(s: &sweep::SweepSummary) -> (usize, usize, usize) {
+    (s.reused, s.dropped, s.computed)
+}
+
+fn json(rows: &[sweep::Row]) -> Vec<serde_json::Value> {
+    rows.iter().map(sweep::without_timing).collect()
+}
+
+#[test]
+fn row_ids_name_the_scene_content_the_hardware_and_not_the_spelling() {
+    use igemu::scene::Scene;
+    let (d1, d2) = (tmp("id-a"), tmp("id-b"));
+    let a = Scene::load(&scene_file(&d1)).unwrap();
+    let b_path = d2.join("small.toml");
+    std::fs::write(&b_path, scene_text(0.05)).unwrap();
+    let b = Scene::load(b_path.to_str().unwrap()).unwrap();
+    assert_eq!(a.name, b.name, "two files, one scene name");
+    let hw = igemu::config::HwConfig::preset("linear12").unwrap();
+    let id = sweep::row_id(&a, &hw);
+    assert_eq!(id.len(), 16);
+    assert!(
+        id.chars()
+            .all(|c| c.is_ascii_hexdigit() && !c.is_ascii_uppercase())
+    );
+    assert_ne!(
+        id,
+        sweep::row_id(&b, &hw),
+        "different content, different id"
+    );
+    // Comments and formatting are not content.
+    let c_path = d2.join("small-reformatted.toml");
+    let text = format!(
+        "# the same scene\n\n{}",
+        scene_text(0.02).replace(" = ", "   =  ")
+    );
+    std::fs::write(&c_path, text).unwrap();
+    let mut c = Scene::load(c_path.to_str().unwrap()).unwrap();
+    c.name = a.name.clone();
+    assert_eq!(sweep::row_id(&c, &hw), id);
+    // The hardware as validated, not its name or its spelling in the grid.
+    let spelled = expand("preset = [\"linear12\"]\ngamma.dac_bits = [8]\n");
+    assert_ne!(spelled[0].hw.name, hw.name);
+    assert_eq!(sweep::row_id(&a, &spelled[0].hw), id);
+    let other = expand("gamma.dac_bits = [9]\n");
+    assert_ne!(sweep::row_id(&a, &other[0].hw), id);
+    // Through the command line: two scene files of one name give two rows, two ids.
+    let g = grid_file(&d1, "g.toml", "gamma.dac_bits = [8]\n");
+    let out = d1.join("two.jsonl").to_string_lossy().into_owned();
+    let s1 = d1.join("small.toml").to_string_lossy().into_owned();
+    let s2 = b_path.to_string_lossy().into_owned();
+    let o = igemu(&["sweep", &s1, &s2, "--grid", &g, "--out", &out]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = rows(&out);
+    assert_eq!(r.len(), 2);
+    assert_eq!(r[0]["scene"], r[1]["scene"]);
+    assert_ne!(r[0]["id"], r[1]["id"]);
+    assert_eq!(r[0]["id"], id.as_str(), "the id of the library");
+}
+
+#[test]
+fn resume_after_editing_the_scene_recomputes_every_row() {
+    use igemu::scene::Scene;
+    let d = tmp("edit");
+    let path = scene_file(&d);
+    let configs = expand("gamma.dac_bits = [6, 8]\n");
+    let out = d.join("o.jsonl").to_string_lossy().into_owned();
+    let old = Scene::load(&path).unwrap();
+    let first = run_lib(&out, &configs, std::slice::from_ref(&old), false);
+    assert_eq!(counts(&first), (0, 0, 2));
+    // A comment and other spacing: the same scene as parsed, every row kept.
+    let text = format!("# edited\n{}\n\n", scene_text(0.02).replace(" = ", "="));
+    std::fs::write(&path, text).unwrap();
+    let same = Scene::load(&path).unwrap();
+    let s = run_lib(&out, &configs, std::slice::from_ref(&same), true);
+    assert_eq!(counts(&s), (2, 0, 0));
+    assert_eq!(s.rows, first.rows, "kept as they were, timing included");
+    // A real edit under the same name: every row recomputed, the old ones dropped.
+    std::fs::write(&path, scene_text(0.1)).unwrap();
+    let edited = Scene::load(&path).unwrap();
+    assert_eq!(edited.name, old.name);
+    let s = run_lib(&out, &configs, std::slice::from_ref(&edited), true);
+    assert_eq!(counts(&s), (0, 2, 2));
+    let fresh_out = d.join("fresh.jsonl").to_string_lossy().into_owned();
+    let fresh = run_lib(&fresh_out, &configs, std::slice::from_ref(&edited), false);
+    assert_eq!(json(&s.rows), json(&fresh.rows));
+    assert_ne!(
+        json(&s.rows),
+        json(&first.rows),
+        "the edit changes the rows"
+    );
+    assert_eq!(rows(&out), json(&fresh.rows));
+}
+
+#[test]
+fn resume_after_an_equivalent_spelling_of_the_grid_keeps_the_rows() {
+    let d = tmp("spelling");
+    let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
+    let scenes = std::slice::from_ref(&scene);
+    let out = d.join("o.jsonl").to_string_lossy().into_owned();
+    let first = run_lib(&out, &expand("gamma.dac_bits = [6, 8]\n"), scenes, false);
+    // The default preset named, the values in the other order: the same two machines.
+    let respelled = expand("preset = [\"linear12\"]\ngamma.dac_bits = [8, 6]\n");
+    let s = run_lib(&out, &respelled, scenes, true);
+    assert_eq!(counts(&s), (2, 0, 0));
+    assert_eq!(
+        s.rows[0].error, first.rows[1].error,
+        "dac_bits 8 is now job 0"
+    );
+    assert_eq!(
+        s.rows[0].timing, first.rows[1].timing,
+        "reused, not recomputed"
+    );
+    // Relabelled with the new grid: the file equals a fresh run of the new grid.
+    let fresh_out = d.join("fresh.jsonl").to_string_lossy().into_owned();
+    let fresh = run_lib(&fresh_out, &respelled, scenes, false);
+    assert_eq!(json(&s.rows), json(&fresh.rows));
+    assert_eq!(rows(&out), json(&fresh.rows));
+    // Two spellings of one machine in one grid share an id; both jobs get their row.
+    let twice = expand("preset = [\"linear12\"]\ngamma.dac_bits = [6, 8]\n");
+    let twice = [twice[1].clone(), respelled[0].clone()];
+    let twice: Vec<grid::Config> = twice
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut c)| {
+            c.index = i;
+            c
+        })
+        .collect();
+    let s = run_lib(&out, &twice, scenes, true);
+    assert_eq!(counts(&s), (2, 1, 0), "the dac_bits 6 row is not asked for");
+    assert_eq!(s.rows[0].id, s.rows[1].id);
+    assert_eq!(rows(&out).len(), 2);
+    let s = run_lib(&out, &twice, scenes, true);
+    assert_eq!(counts(&s), (2, 0, 0));
+    // A changed grid: the common machine is kept, the new one computed.
+    let s = run_lib(&out, &expand("gamma.dac_bits = [8, 9]\n"), scenes, true);
+    assert_eq!(counts(&s), (1, 1, 1));
+}
+
+#[test]
+fn resume_drops_and_counts_partial_foreign_and_duplicate_lines() {
+    use std::io::Write;
+    let d = tmp("drops");
+    let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
+    let scenes = std::slice::from_ref(&scene);
+    let configs = expand("gamma.dac_bits = [6, 8]\n");
+    let out = d.join("o.jsonl").to_string_lossy().into_owned();
+    let first = run_lib(&out, &configs, scenes, false);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let line0 = text.lines().next().unwrap().to_string();
+    let mut foreign = first.rows[1].clone();
+    foreign.id = "0123456789abcdef".into();
+    {
+        let mut f = std::fs::OpenOptions::new().append(true).open(&out).unwrap();
+        writeln!(f, "{line0}").unwrap(); // a duplicate
+        writeln!(f, "{}", serde_json::to_string(&foreign).unwrap()).unwrap(); // another sweep's
+        writeln!(f, "not a row").unwrap();
+        f.write_all(b"{\"id\":\"0123\",\"index\":").unwrap(); // a killed write
+    }
+    assert_eq!(sweep::read_rows(&out).unwrap().1, 2);
+    let s = run_lib(&out, &configs, scenes, true);
+    assert_eq!(counts(&s), (2, 4, 0));
+    assert_eq!(s.rows, first.rows);
+    assert_eq!(sweep::read_rows(&out).unwrap(), (first.rows.clone(), 0));
+    // A last line without its newline is partial even when it parses: dropped and recomputed.
+    let text = std::fs::read_to_string(&out).unwrap();
+    std::fs::write(&out, text.trim_end()).unwrap();
+    let s = run_lib(&out, &configs, scenes, true);
+    assert_eq!(counts(&s), (1, 1, 1));
+    assert_eq!(json(&s.rows), json(&first.rows));
+    assert_eq!(rows(&out), json(&first.rows));
+}
+
+mod shards {
+    use super::*;
+    use igemu::sweep::grid::Shard;
+    use proptest::prelude::*;
+
+    fn count() -> impl Strategy<Value = usize> {
+        prop_oneof![
+            0usize..50,
+            any::<usize>(),
+            Just(usize::MAX),
+            Just(usize::MAX - 1),
+            Just(1usize << 62),
+            (1usize << 62) - 3..(1usize << 62) + 3,
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        /// Neighbouring shards meet, the first starts at 0, the last ends at the total, and
+        /// no shard is more than one job longer than another: concatenated in K order they
+        /// are every job once.
+        #[test]
+        fn shards_partition_the_jobs(n in count(), k in count(), total in count()) {
+            let n = n.max(1);
+            let k = 1 + k % n;
+            let s = Shard::parse(&format!("{k}/{n}")).unwrap();
+            prop_assert_eq!(s, Shard { k, n });
+            let r = s.range(total);
+            prop_assert!(r.start <= r.end && r.end <= total);
+            // Between floor(total / n) and ceil(total / n) jobs.
+            prop_assert!(r.len() >= total / n);
+            prop_assert!(r.len() <= total / n + usize::from(total % n != 0));
+            if k == 1 {
+                prop_assert_eq!(r.start, 0);
+            } else {
+                prop_assert_eq!(Shard { k: k - 1, n }.range(total).end, r.start);
+            }
+            if k == n {
+                prop_assert_eq!(r.end, total);
+            } else {
+                prop_assert_eq!(Shard { k: k + 1, n }.range(total).start, r.end);
+            }
+        }
+    }
+
+    #[test]
+    fn small_shards_concatenate_to_all_jobs() {
+        for n in 1..=12 {
+            for total in 0..=40 {
+                let all: Vec<usize> = (1..=n).flat_map(|k| Shard { k, n }.range(total)).collect();
+                assert_eq!(
+                    all,
+                    (0..total).collect::<Vec<_>>(),
+                    "{n} shards, {total} jobs"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn huge_shards_run_from_the_command_line() {
+        let d = tmp("huge-shard");
+        let scene = scene_file(&d);
+        // 8 jobs: K * 8 overflows 64 bits for these K.
+        let g = grid_file(
+            &d,
+            "g.toml",
+            "gamma.dac_bits = [6, 7, 8, 9, 10, 11, 12, 13]\n",
+        );
+        let out = d.join("o.jsonl").to_string_lossy().into_owned();
+        let max = usize::MAX.to_string();
+        for (shard, expect) in [
+            ("4611686018427387904/4611686018427387904", 1),
+            ("1/4611686018427387904", 0),
+            (&format!("{max}/{max}") as &str, 1),
+            (&format!("1/{max}"), 0),
+        ] {
+            let o = igemu(&[
+                "sweep", &scene, "--grid", &g, "--out", &out, "--shard", shard,
+            ]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(0), "{shard}: {err}");
+            let r = rows(&out);
+            assert_eq!(r.len(), expect, "{shard}");
+            if expect == 1 {
+                assert_eq!(r[0]["index"], 7, "the last shard has the last job");
+            }
+        }
+    }
+}
+
+mod files {
+    use super::*;
+
+    /// The files in `dir`, sorted.
+    fn listing(dir: &std::path::Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    fn some_rows(name: &str) -> (std::path::PathBuf, Vec<sweep::Row>) {
+        let d = tmp(name);
+        let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
+        let out = d.join("o.jsonl").to_string_lossy().into_owned();
+        let configs = expand("gamma.dac_bits = [6, 8]\n");
+        let s = run_lib(&out, &configs, std::slice::from_ref(&scene), false);
+        (d, s.rows)
+    }
+
+    #[test]
+    fn the_plot_replaces_its_file_by_a_rename() {
+        let (d, rows) = some_rows("plot-rename");
+        for ext in ["svg", "png"] {
+            // A second name for the old plot: a write in place would change it too.
+            let p = d.join(format!("p.{ext}"));
+            let keep = d.join(format!("keep.{ext}"));
+            std::fs::write(&p, "old plot").unwrap();
+            std::fs::hard_link(&p, &keep).unwrap();
+            let before = listing(&d);
+            sweep::plot::write(&rows, pareto::Axis::Error, p.to_str().unwrap()).unwrap();
+            let kept = std::fs::read(&keep).unwrap();
+            assert!(kept == b"old plot", "{ext}: written in place, not renamed");
+            assert!(
+                std::fs::read(&p).unwrap() != b"old plot",
+                "{ext}: not written"
+            );
+            assert_eq!(listing(&d), before, "no temporary left ({ext})");
+        }
+        assert!(image::open(d.join("p.png")).is_ok());
+    }
+
+    #[test]
+    fn a_failed_write_leaves_no_temporary() {
+        let (d, rows) = some_rows("failed-write");
+        // The output names a folder: the rename fails.
+        for name in ["busy.svg", "busy.png", "busy.jsonl"] {
+            let target = d.join(name);
+            std::fs::create_dir_all(target.join("inside")).unwrap();
+            let before = listing(&d);
+            let t = target.to_str().unwrap();
+            let e = if name.ends_with("jsonl") {
+                sweep::rewrite_sorted(t, &rows).unwrap_err()
+            } else {
+                sweep::plot::write(&rows, pareto::Axis::Error, t).unwrap_err()
+            };
+            assert!(e.to_string().contains(name), "{name}: {e}");
+            assert_eq!(listing(&d), before, "{name}");
+            assert_eq!(listing(&target), ["inside"], "{name}");
+        }
+        // A folder that does not exist: nothing is created.
+        let missing = d.join("missing").join("p.svg");
+        assert!(sweep::plot::write(&rows, pareto::Axis::Error, missing.to_str().unwrap()).is_err());
+        assert!(!d.join("missing").exists());
+    }
 }

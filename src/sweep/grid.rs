@@ -24,7 +24,8 @@ pub struct Config {
     pub index: usize,
     /// Field path -> value (TOML value).
     pub fields: BTreeMap<String, toml::Value>,
-    /// The canonical text `path=value;...` (sorted paths): the key of the stable id.
+    /// The canonical text `path=value;...` (sorted paths): names the configuration in
+    /// messages (the row id hashes the validated hardware, see [`super::rows`]).
     pub canonical: String,
     /// The hardware it describes.
     pub hw: HwConfig,
@@ -200,8 +201,17 @@ impl Shard {
         Ok(Shard { k, n })
     }
 
-    /// The half-open range of job indices of this shard among `total` jobs.
+    /// The half-open range of job indices of this shard among `total` jobs:
+    /// `floor((K - 1) * total / N)..floor(K * total / N)`, computed in 128 bits so that no
+    /// K, N or total overflows. Shard `K` ends where shard `K + 1` starts, shard 1 starts at
+    /// 0 and shard N ends at `total`, so the shards partition the jobs; when N exceeds the
+    /// number of jobs some shards are empty. A shard built by hand with K outside `1..=N`
+    /// is clamped into the valid range.
     pub fn range(&self, total: usize) -> std::ops::Range<usize> {
-        (self.k - 1) * total / self.n..self.k * total / self.n
+        let n = self.n.max(1) as u128;
+        let k = (self.k.max(1) as u128).min(n);
+        // k * total / n <= total, so the casts back are exact.
+        let at = |k: u128| (k * total as u128 / n) as usize;
+        at(k - 1)..at(k)
     }
 }

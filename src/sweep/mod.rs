@@ -3,23 +3,37 @@
 //!
 //! * Order: configurations in grid order ([`grid`]), scenes inner; job `i` is configuration
 //!   `i / scenes`, scene `i % scenes`.
-//! * Rows are appended and flushed one by one as they finish, so a killed sweep loses no
-//!   completed row. When every job of the run is done the file is rewritten in job order
-//!   (temporary file + rename), so a serial, a parallel and a resumed run give the same file.
-//! * `--resume` reads the file, keeps every complete row (keyed by the stable row id, an
-//!   FNV-1a hash of scene name and configuration), drops a partial last line and runs the rest.
+//! * Row ids name the row's inputs by content: the scene as parsed, the validated hardware
+//!   (not its spelling in the grid) and the tool version ([`rows`] has the definition). A
+//!   row is reused only when all three are unchanged.
+//! * Rows are appended to `--out` directly and flushed one by one as they finish, by design:
+//!   a killed sweep keeps every completed row, and at most the last line is partial. When
+//!   every job of the run is done the file is rewritten in job order through a temporary
+//!   file in the same folder and a rename, so a serial, a parallel and a resumed run give
+//!   the same file, and a failed rewrite leaves the appended rows as they were. The plot
+//!   (`--plot`, [`plot`]) is written the same way.
+//! * `--resume` reads the file and keeps each row whose id is a job of this run (with the
+//!   job's current index, scene name and grid fields, so a reordered or respelled grid
+//!   reuses them); it drops the rows whose inputs changed (stale ids), rows of other sweeps
+//!   or shards, duplicates and a partial last line, counts them
+//!   ([`SweepSummary::dropped`]), rewrites the file without them and runs the rest.
 //! * `--shard K/N` runs a contiguous block of jobs: shard files concatenated in K order equal
-//!   the unsharded output.
+//!   the unsharded output. Every K/N with 1 <= K <= N is valid ([`grid::Shard::range`]
+//!   cannot overflow); shards beyond the number of jobs are empty.
 
 pub mod grid;
 pub mod pareto;
 pub mod plot;
+pub mod rows;
+
+pub use rows::{hardware_key, read_rows, rewrite_sorted, row_id, row_id_from_keys, scene_key};
 
 use crate::error::{Error, Result};
 use crate::pipeline::{self, Cache};
 use crate::scene::Scene;
 use crate::stage::RunOptions;
 use grid::{Config, Shard};
+use rows::io;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
@@ -123,7 +137,8 @@ pub struct RowTiming {
 /// One JSON line of the output.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Row {
-    /// Stable id: 16 hex digits of FNV-1a(scene name, '\n', canonical configuration).
+    /// Stable id of the row's inputs: 16 hex digits of FNV-1a over the scene's content, the
+    /// hardware's content and the tool version ([`row_id`]).
     pub id: String,
     /// Job index in the full (unsharded) sweep.
     pub index: usize,
@@ -159,14 +174,6 @@ pub struct Job {
     pub scene: usize,
 }
 
-/// The stable id of a (scene, configuration) row.
-pub fn row_id(scene: &str, canonical: &str) -> String {
-    let mut key = scene.as_bytes().to_vec();
-    key.push(b'\n');
-    key.extend_from_slice(canonical.as_bytes());
-    format!("{:016x}", crate::fnv::fnv1a(&key))
-}
-
 /// All jobs of a sweep in order.
 pub fn jobs(configs: usize, scenes: usize) -> Vec<Job> {
     (0..configs * scenes)
@@ -174,6 +181,19 @@ pub fn jobs(configs: usize, scenes: usize) -> Vec<Job> {
             index,
             config: index / scenes,
             scene: index % scenes,
+        })
+        .collect()
+}
+
+/// The grid fields of a configuration as the JSON of a row.
+fn config_json(cfg: &Config) -> BTreeMap<String, serde_json::Value> {
+    cfg.fields
+        .iter()
+        .map(|(k, v)| {
+            (
+                k.clone(),
+                serde_json::to_value(v).unwrap_or(serde_json::Value::Null),
+            )
         })
         .collect()
 }
@@ -187,6 +207,18 @@ pub fn run_job(
     cache: Option<&Cache>,
     flicker: Option<u32>,
 ) -> Result<Row> {
+    run_job_as(row_id(scene, &cfg.hw), job, cfg, scene, cache, flicker)
+}
+
+/// [`run_job`] with the row id already known.
+fn run_job_as(
+    id: String,
+    job: Job,
+    cfg: &Config,
+    scene: &Scene,
+    cache: Option<&Cache>,
+    flicker: Option<u32>,
+) -> Result<Row> {
     let t = std::time::Instant::now();
     let r = pipeline::render_with(scene, &cfg.hw, RunOptions::FAST, cache)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -194,19 +226,10 @@ pub fn run_job(
     let c = &rep.end_to_end.codes;
     let w = &rep.end_to_end.weber;
     Ok(Row {
-        id: row_id(&scene.name, &cfg.canonical),
+        id,
         index: job.index,
         scene: scene.name.clone(),
-        config: cfg
-            .fields
-            .iter()
-            .map(|(k, v)| {
-                (
-                    k.clone(),
-                    serde_json::to_value(v).unwrap_or(serde_json::Value::Null),
-                )
-            })
-            .collect(),
+        config: config_json(cfg),
         error: ErrorMetrics {
             max_code_diff: c.max_abs_diff,
             mean_code_diff: if c.count == 0 {
@@ -247,55 +270,6 @@ pub fn run_job(
     })
 }
 
-fn io(path: &str) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
-        path: path.to_string(),
-        source,
-    }
-}
-
-/// Reads the complete rows of an output file. A line that does not parse (a partial last
-/// line of a killed run) is dropped; returns the rows and whether anything was dropped.
-pub fn read_rows(path: &str) -> Result<(Vec<Row>, bool)> {
-    let text = match std::fs::read(path) {
-        Ok(b) => String::from_utf8_lossy(&b).into_owned(),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), false)),
-        Err(e) => return Err(io(path)(e)),
-    };
-    let mut rows = Vec::new();
-    let mut dropped = false;
-    for (i, line) in text.split('\n').enumerate() {
-        if line.trim().is_empty() {
-            continue;
-        }
-        // A line without its newline is partial even if it parses.
-        let complete = text.split('\n').nth(i + 1).is_some();
-        match serde_json::from_str::<Row>(line) {
-            Ok(r) if complete => rows.push(r),
-            _ => dropped = true,
-        }
-    }
-    Ok((rows, dropped))
-}
-
-/// Writes rows (sorted by index, one per id) to `path` through a temporary file and a rename.
-pub fn rewrite_sorted(path: &str, rows: &[Row]) -> Result<()> {
-    let mut by_index: BTreeMap<usize, &Row> = BTreeMap::new();
-    for r in rows {
-        by_index.entry(r.index).or_insert(r);
-    }
-    let tmp = format!("{path}.tmp");
-    {
-        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(io(&tmp))?);
-        for r in by_index.values() {
-            let line = serde_json::to_string(r).expect("rows serialise");
-            writeln!(f, "{line}").map_err(io(&tmp))?;
-        }
-        f.flush().map_err(io(&tmp))?;
-    }
-    std::fs::rename(&tmp, path).map_err(io(path))
-}
-
 /// Options of a sweep run.
 pub struct SweepOptions<'a> {
     /// Output JSON-lines file.
@@ -317,8 +291,12 @@ pub struct SweepOptions<'a> {
 pub struct SweepSummary {
     /// Jobs in this shard.
     pub planned: usize,
-    /// Rows found in the file and kept (`--resume`).
+    /// Jobs of this run whose row was found in the file and kept (`--resume`).
     pub reused: usize,
+    /// Lines of the file not kept (`--resume`): rows whose inputs changed (stale ids), rows
+    /// of other sweeps or shards, duplicates, and lines that are not complete rows (a
+    /// partial last line).
+    pub dropped: usize,
     /// Rows computed now.
     pub computed: usize,
     /// All rows of the shard, in order.
@@ -335,27 +313,28 @@ pub fn run(
     let all = jobs(configs.len(), scenes.len());
     let range = opts.shard.map_or(0..all.len(), |s| s.range(all.len()));
     let mine = &all[range];
-    let id_of = |j: &Job| row_id(&scenes[j.scene].name, &configs[j.config].canonical);
-    let wanted: BTreeSet<String> = mine.iter().map(id_of).collect();
-    let mut kept: Vec<Row> = Vec::new();
-    if opts.resume {
-        let (rows, _dropped) = read_rows(opts.out)?;
-        let mut seen = BTreeSet::new();
-        for r in rows {
-            if wanted.contains(&r.id) && seen.insert(r.id.clone()) {
-                kept.push(r);
-            }
-        }
-        // Drop the partial line and any foreign or duplicate row before appending.
+    let scene_keys: Vec<u64> = scenes.iter().map(scene_key).collect();
+    let hw_keys: Vec<u64> = configs.iter().map(|c| hardware_key(&c.hw)).collect();
+    let ids: Vec<String> = mine
+        .iter()
+        .map(|j| row_id_from_keys(scene_keys[j.scene], hw_keys[j.config]))
+        .collect();
+    let (kept, dropped) = if opts.resume {
+        let (rows, skipped) = read_rows(opts.out)?;
+        let (kept, unused) = keep_rows(rows, mine, &ids, configs, scenes);
+        // Drop the partial line and every row not kept before appending.
         rewrite_sorted(opts.out, &kept)?;
+        (kept, skipped + unused)
     } else {
         std::fs::File::create(opts.out).map_err(io(opts.out))?;
-    }
-    let done: BTreeSet<&str> = kept.iter().map(|r| r.id.as_str()).collect();
-    let todo: Vec<Job> = mine
+        (Vec::new(), 0)
+    };
+    let done: BTreeSet<usize> = kept.iter().map(|r| r.index).collect();
+    let todo: Vec<(Job, &String)> = mine
         .iter()
         .copied()
-        .filter(|j| !done.contains(id_of(j).as_str()))
+        .zip(&ids)
+        .filter(|(j, _)| !done.contains(&j.index))
         .collect();
     let reused = kept.len();
     let file = std::fs::OpenOptions::new()
@@ -366,15 +345,16 @@ pub fn run(
     let count = std::sync::atomic::AtomicUsize::new(reused);
     let total = mine.len();
     progress(reused, total);
-    let work = |j: &Job| -> Result<Row> {
-        let row = run_job(
+    let work = |(j, id): &(Job, &String)| -> Result<Row> {
+        let row = run_job_as(
+            (*id).clone(),
             *j,
             &configs[j.config],
             &scenes[j.scene],
             opts.cache,
             opts.flicker,
         )?;
-        let mut line = serde_json::to_string(&row).expect("rows serialise");
+        let mut line = serde_json::to_string(&row).unwrap_or_default();
         line.push('\n');
         {
             let mut f = writer.lock().unwrap_or_else(|e| e.into_inner());
@@ -412,14 +392,52 @@ pub fn run(
     Ok(SweepSummary {
         planned: total,
         reused,
+        dropped,
         computed,
         rows,
     })
 }
 
+/// The rows of `file` that answer jobs of this run, one per job (`ids[i]` is the id of
+/// `mine[i]`), relabelled with the job's index, scene name and grid fields; and the number of
+/// rows of `file` not used. A job takes the row with its id and index if there is one, else
+/// the first row with its id (a reordered grid, or two configurations of one grid that
+/// spell the same hardware).
+fn keep_rows(
+    file: Vec<Row>,
+    mine: &[Job],
+    ids: &[String],
+    configs: &[Config],
+    scenes: &[Scene],
+) -> (Vec<Row>, usize) {
+    let mut exact: BTreeMap<(&str, usize), usize> = BTreeMap::new();
+    let mut first: BTreeMap<&str, usize> = BTreeMap::new();
+    for (p, r) in file.iter().enumerate() {
+        exact.entry((r.id.as_str(), r.index)).or_insert(p);
+        first.entry(r.id.as_str()).or_insert(p);
+    }
+    let mut used = vec![false; file.len()];
+    let mut kept = Vec::new();
+    for (j, id) in mine.iter().zip(ids) {
+        let at = exact
+            .get(&(id.as_str(), j.index))
+            .or_else(|| first.get(id.as_str()));
+        if let Some(&p) = at {
+            used[p] = true;
+            let mut r = file[p].clone();
+            r.index = j.index;
+            r.scene = scenes[j.scene].name.clone();
+            r.config = config_json(&configs[j.config]);
+            kept.push(r);
+        }
+    }
+    let unused = used.iter().filter(|&&u| !u).count();
+    (kept, unused)
+}
+
 /// A row as JSON without its run state (timing, reused stages), for comparing runs.
 pub fn without_timing(r: &Row) -> serde_json::Value {
-    let mut v = serde_json::to_value(r).expect("rows serialise");
+    let mut v = serde_json::to_value(r).unwrap_or_default();
     if let Some(o) = v.as_object_mut() {
         o.remove("timing");
         o.remove("reused");

@@ -64,22 +64,24 @@ fn font() {
 }
 
 /// Writes the plot of `rows` to `path` (SVG or PNG by extension), with `error` as the
-/// vertical axis.
+/// vertical axis. The plot is drawn into a temporary file in the same folder (ending with the
+/// same file name, so the format is the same) and renamed onto `path`: a failed or killed
+/// run never leaves a half-written plot, and on an error `path` is left as it was.
 pub fn write(rows: &[Row], error: Axis, path: &str) -> Result<()> {
     let format = PlotFormat::of(path).map_err(|m| plot_error(path, m))?;
     font();
-    match format {
+    super::rows::write_via_temp(path, |tmp| match format {
         PlotFormat::Svg => {
-            let root = SVGBackend::new(path, SIZE).into_drawing_area();
+            let root = SVGBackend::new(tmp, SIZE).into_drawing_area();
             draw(&root, rows, error).map_err(|e| plot_error(path, e))?;
             root.present().map_err(|e| plot_error(path, e))
         }
         PlotFormat::Png => {
-            let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+            let root = BitMapBackend::new(tmp, SIZE).into_drawing_area();
             draw(&root, rows, error).map_err(|e| plot_error(path, e))?;
             root.present().map_err(|e| plot_error(path, e))
         }
-    }
+    })
 }
 
 /// The range of `v` with a 5 % margin (a unit range around a single value).
