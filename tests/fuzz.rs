@@ -191,8 +191,10 @@ fn wild(rng: &mut Rng) -> Value {
     match rng.next_u64() % 9 {
         0 | 1 => Value::Float(f[(rng.next_u64() % f.len() as u64) as usize]),
         2 | 3 => Value::Integer(i[(rng.next_u64() % i.len() as u64) as usize]),
-        4 => Value::String(["", "junk", "UQ99.0", "Q0.0", "RND", "64"][(rng.next_u64() % 6) as usize].into()),
-        5 => Value::Boolean(rng.next_u64() % 2 == 0),
+        4 => Value::String(
+            ["", "junk", "UQ99.0", "Q0.0", "RND", "64"][(rng.next_u64() % 6) as usize].into(),
+        ),
+        5 => Value::Boolean(rng.next_u64().is_multiple_of(2)),
         6 => Value::Array(
             (0..rng.next_u64() % 6)
                 .map(|_| Value::Float(f[(rng.next_u64() % f.len() as u64) as usize]))
@@ -346,8 +348,23 @@ proptest! {
 /// range, as a hardware file text.
 fn random_hw(rng: &mut Rng) -> String {
     let mut pick = |xs: &[&str]| xs[(rng.next_u64() % xs.len() as u64) as usize].to_string();
-    let quants = ["TRN", "TRN_ZERO", "RND", "RND_ZERO", "RND_INF", "RND_MIN_INF", "RND_CONV"];
-    let preset = pick(&["linear12", "linear11", "linear8", "log8-potentiate", "log8-logadd", "log7-logadd"]);
+    let quants = [
+        "TRN",
+        "TRN_ZERO",
+        "RND",
+        "RND_ZERO",
+        "RND_INF",
+        "RND_MIN_INF",
+        "RND_CONV",
+    ];
+    let preset = pick(&[
+        "linear12",
+        "linear11",
+        "linear8",
+        "log8-potentiate",
+        "log8-logadd",
+        "log7-logadd",
+    ]);
     let samples = pick(&["1", "2", "4", "8"]);
     let coord = pick(&["Q13.4", "Q12.4", "Q14.5", "Q11.3"]);
     let filter = pick(&["box", "tent", "gaussian"]);
@@ -357,7 +374,14 @@ fn random_hw(rng: &mut Rng) -> String {
     let q1 = pick(&quants);
     let q2 = pick(&quants);
     let dac = pick(&["1", "4", "6", "8", "9", "10", "12", "16"]);
-    let dither = pick(&["none", "bayer2", "bayer4", "bayer8", "blue_noise", "floyd_steinberg"]);
+    let dither = pick(&[
+        "none",
+        "bayer2",
+        "bayer4",
+        "bayer8",
+        "blue_noise",
+        "floyd_steinberg",
+    ]);
     let placement = pick(&["after_lut", "before_lut"]);
     let frac = pick(&["1", "2", "3", "4"]);
     let p = pick(&["0.02", "0.1", "0.3", "0.9"]);
@@ -388,7 +412,7 @@ fn random_scene(rng: &mut Rng) -> String {
             .collect();
         objs += &common::tri([v[0], v[1], v[2]], [0, 1, 2].map(|_| rng.range(0.0, 1.0)));
     }
-    if rng.next_u64() % 2 == 0 {
+    if rng.next_u64().is_multiple_of(2) {
         objs += &common::line(
             [rng.range(0.0, w as f64), rng.range(0.0, h as f64), 0.3],
             [rng.range(0.0, w as f64), rng.range(0.0, h as f64), 0.3],
@@ -405,7 +429,7 @@ fn random_scene(rng: &mut Rng) -> String {
             rng.range(0.1, 3.0),
         );
     }
-    let lens = if rng.next_u64() % 2 == 0 {
+    let lens = if rng.next_u64().is_multiple_of(2) {
         "[camera.lens]\nkind = \"thin_lens\"\nfocal_length = 0.02\nlens_radius = 0.02\nfocus_distance = 10.0\ndeep = 0.2\ncoc = 0.000035\n\n"
     } else {
         ""

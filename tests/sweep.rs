@@ -358,6 +358,7 @@ fn stage_reuse_gives_the_rows_of_full_renders() {
             jobs: 1,
             cache: c,
             flicker: None,
+            max_memory: None,
         };
         sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).unwrap();
         outs.push(rows(&out));
@@ -453,6 +454,7 @@ fn reuse_rows(name: &str, scene: &igemu::scene::Scene, grid: &str) -> Vec<sweep:
         jobs: 1,
         cache: Some(&cache),
         flicker: None,
+        max_memory: None,
     };
     sweep::run(&configs, std::slice::from_ref(scene), &opts, &|_, _| {})
         .unwrap()
@@ -525,6 +527,7 @@ fn run_lib(
         jobs: 1,
         cache: None,
         flicker: None,
+        max_memory: None,
     };
     sweep::run(configs, scenes, &opts, &|_, _| {}).unwrap()
 }

@@ -137,16 +137,20 @@ impl Grid {
             }
             let hw_file = TomlFile::from_text(&canonical, &text);
             let mut hw = HwConfig::from_toml(&hw_file).map_err(|e| {
-                // Point at the grid field: the unknown or out-of-range one if known.
-                let field = if e.field.is_empty() {
+                // Point at the grid field: the one the hardware error names, else the one
+                // on the line it points at (the text has one line per axis, in order), else
+                // one whose name the message mentions.
+                let field = if !e.field.is_empty() {
+                    e.field.clone()
+                } else if let Some((p, _)) = e.line.and_then(|l| self.axes.get(l.wrapping_sub(1))) {
+                    p.clone()
+                } else {
                     self.axes
                         .iter()
                         .map(|(p, _)| p.as_str())
                         .find(|p| e.msg.contains(p.rsplit('.').next().unwrap_or(p)))
                         .unwrap_or("")
                         .to_string()
-                } else {
-                    e.field.clone()
                 };
                 let (line, col) = file
                     .locate(&field)

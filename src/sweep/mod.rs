@@ -207,7 +207,16 @@ pub fn run_job(
     cache: Option<&Cache>,
     flicker: Option<u32>,
 ) -> Result<Row> {
-    run_job_as(row_id(scene, &cfg.hw), job, cfg, scene, cache, flicker)
+    let opts = RunOptions::FAST;
+    run_job_as(
+        row_id(scene, &cfg.hw),
+        job,
+        cfg,
+        scene,
+        cache,
+        flicker,
+        opts,
+    )
 }
 
 /// [`run_job`] with the row id already known.
@@ -218,9 +227,10 @@ fn run_job_as(
     scene: &Scene,
     cache: Option<&Cache>,
     flicker: Option<u32>,
+    opts: RunOptions,
 ) -> Result<Row> {
     let t = std::time::Instant::now();
-    let r = pipeline::render_with(scene, &cfg.hw, RunOptions::FAST, cache)?;
+    let r = pipeline::render_with(scene, &cfg.hw, opts, cache)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     let rep = &r.report;
     let c = &rep.end_to_end.codes;
@@ -284,6 +294,8 @@ pub struct SweepOptions<'a> {
     pub cache: Option<&'a Cache>,
     /// Add the small-object flicker metrics at this many sub-pixel phases per axis.
     pub flicker: Option<u32>,
+    /// The memory limit of each render (`None`: half the machine's memory).
+    pub max_memory: Option<u64>,
 }
 
 /// Summary of a run.
@@ -353,6 +365,10 @@ pub fn run(
             &scenes[j.scene],
             opts.cache,
             opts.flicker,
+            RunOptions {
+                max_memory: opts.max_memory,
+                ..RunOptions::FAST
+            },
         )?;
         let mut line = serde_json::to_string(&row).unwrap_or_default();
         line.push('\n');

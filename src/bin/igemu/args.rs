@@ -66,10 +66,9 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
         Some('T') => (&u[..u.len() - 1], 40),
         _ => (u, 0),
     };
-    let v: f64 = num
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{s}` is not a size (bytes, or a number with K, M, G or T, e.g. 512M or 8G)"))?;
+    let v: f64 = num.trim().parse().map_err(|_| {
+        format!("`{s}` is not a size (bytes, or a number with K, M, G or T, e.g. 512M or 8G)")
+    })?;
     let bytes = v * (1u64 << shift) as f64;
     if !(bytes.is_finite() && bytes >= 1.0 && bytes < 2f64.powi(63)) {
         return Err(format!("`{s}` must be at least 1 byte and below 8 EiB"));

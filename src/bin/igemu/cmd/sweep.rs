@@ -8,6 +8,7 @@ use clap::Args;
 use igemu::error::Error;
 use igemu::pipeline;
 use igemu::scene::Scene;
+use std::io::Write;
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -41,6 +42,9 @@ pub struct SweepArgs {
     /// Add small-object flicker metrics to every row: the flicker scene swept over PHASES x PHASES sub-pixel phases (2..=64; `igemu flicker` uses 32).
     #[arg(long, value_name = "PHASES")]
     pub flicker: Option<u32>,
+    /// Refuse a render whose memory estimate exceeds SIZE (bytes, or with K, M, G, T; default half the machine's memory); with --jobs N, N renders run at once.
+    #[arg(long, value_name = "SIZE", value_parser = crate::args::parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 /// Runs `igemu sweep`; returns the exit code.
@@ -115,6 +119,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         jobs: a.jobs,
         cache: if a.no_reuse { None } else { Some(&cache) },
         flicker: a.flicker,
+        max_memory: a.max_memory,
     };
     // Progress bar with ETA on a terminal (indicatif hides it when stderr is not a terminal).
     let bar = indicatif::ProgressBar::new(0);
@@ -137,15 +142,17 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     let summary = sweep::run(&configs, &scenes, &opts, &progress);
     bar.finish_and_clear();
     let summary = summary?;
-    eprintln!(
-        "igemu sweep: {} configurations x {} scenes; this run: {} rows ({} kept from {}, {} computed) -> {}",
+    // A closed stderr must not stop the command: the rows are written.
+    let _ = writeln!(
+        std::io::stderr(),
+        "igemu sweep: {} configurations x {} scenes; this run: {} rows -> {}: kept {}, dropped {} (stale or foreign), computed {}",
         configs.len(),
         scenes.len(),
         summary.planned,
-        summary.reused,
         a.out,
-        summary.computed,
-        a.out
+        summary.reused,
+        summary.dropped,
+        summary.computed
     );
     let rows = &summary.rows;
     if let Some(p) = &a.plot {
