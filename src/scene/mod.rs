@@ -42,6 +42,24 @@ pub const MIN_TESSELLATION: u32 = 3;
 /// Largest accepted tessellation level of a canonical object.
 pub const MAX_TESSELLATION: u32 = 1024;
 
+/// Largest magnitude of a world coordinate and largest length (radius, clipping plane, focal
+/// length), in scene units; screen-space x and y (pixels) have the same bound. Beyond it the
+/// front end's products of coordinates lose the precision it needs.
+pub const MAX_COORD: f64 = 1e9;
+
+/// Smallest positive length in scene units (radius, clipping plane, focal length, lens radius,
+/// circle of confusion): below it `1 / near` and the projection's scale leave f64's range.
+pub const MIN_LENGTH: f64 = 1e-9;
+
+/// Largest intensity (light, vertex, line, light point), specular coefficient and emission;
+/// 1 = full white.
+pub const MAX_INTENSITY: f64 = 1e6;
+
+/// Largest guard band of the hardware beyond each screen edge, in pixels (`raster.guard_band`
+/// is in `0..=MAX_GUARD_BAND`). It bounds the line widths and light-point sizes of a scene:
+/// at most `2 (screen diagonal + 2 MAX_GUARD_BAND)` pixels.
+pub const MAX_GUARD_BAND: u32 = 4096;
+
 /// Embedded scenes by name: `(name, TOML text)`. [`Scene::embedded`] looks names up here.
 pub const EMBEDDED: &[(&str, &str)] = &[
     ("default", include_str!("default.toml")),
@@ -361,6 +379,13 @@ impl Scene {
     /// allowed range.
     pub fn from_toml(file: &TomlFile) -> Result<Scene, FileError> {
         parse::scene_from_toml(file)
+    }
+
+    /// What a scene field expects, by dotted path (`object[2].tessellation` -> `an integer
+    /// in 3..=1024`): the type and the allowed range that messages name. `None` for a path
+    /// that is not a field.
+    pub fn field_hint(path: &str) -> Option<String> {
+        parse::hint(path)
     }
 
     /// Reads, parses and validates a scene file from disk.
