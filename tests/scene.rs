@@ -884,3 +884,123 @@ fn errors_from_files_on_disk_name_the_file() {
     assert!(missing.msg.contains("cannot read"), "{missing}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+// ---------------------------------------------------------------- bounds (issue 13)
+
+/// The bounds that keep every loop finite accept their edges, refuse beyond them, and the
+/// widest accepted line and light point render at once (a line of width 1e308 hung).
+#[test]
+fn line_widths_point_sizes_and_the_lens_are_bounded() {
+    // 64 x 48: diagonal 80, bound 2 (80 + 2 * 4096) = 16544 pixels.
+    let widest = "[[object]]\nkind = \"line\"\nspace = \"screen\"\nfrom = [-10, 5, 0.5]\nto = [70, 40, 0.5]\nintensity = 1\nwidth = 16544\n\n[[object]]\nkind = \"light_point\"\nspace = \"screen\"\nposition = [20, 20, 0.4]\nintensity = 1\nsize = 16544\n";
+    let s = scene(widest);
+    let t = std::time::Instant::now();
+    let hw = igemu::config::HwConfig::default_config();
+    let r = igemu::pipeline::render(&s, &hw, igemu::stage::RunOptions::FAST).unwrap();
+    assert!(r.dac.iter().all(|&c| c > 0), "the line covers the screen");
+    assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+    let wider = scene_text(&widest.replacen("width = 16544", "width = 16544.5", 1));
+    assert_err(
+        &wider,
+        "object[0].width",
+        "width = 16544.5",
+        "(0, 16544] pixels",
+    );
+    let huge = scene_text(&widest.replacen("size = 16544", "size = 1e308", 1));
+    assert_err(&huge, "object[1].size", "size = 1e308", "got 1e308");
+
+    // A view volume at least 0.1 % deep (the background's screen depth stays <= 1001).
+    let thin = BASE
+        .replace("far = 100.0", "far = 1.0005")
+        .replace("{objects}", "");
+    assert_err(
+        &thin,
+        "camera.far",
+        "far = 1.0005",
+        "at least 1.001 camera.near",
+    );
+
+    // The lens: lens_radius up to camera.near (1 in BASE), f_number down to F / (2 near).
+    let lens = |body: &str| {
+        BASE.replace("{objects}", &format!("[camera.lens]\nkind = \"thin_lens\"\nfocal_length = 0.05\nfocus_distance = 10\n{body}\n"))
+    };
+    let ok = |body: &str| Scene::from_toml(&TomlFile::from_text("t.toml", &lens(body))).unwrap();
+    ok("lens_radius = 1.0");
+    ok("f_number = 0.025");
+    for (body, field, has) in [
+        (
+            "lens_radius = 1.0001",
+            "camera.lens.lens_radius",
+            "camera.near = 1",
+        ),
+        (
+            "lens_radius = 1e308",
+            "camera.lens.lens_radius",
+            "[1e-9, 1e9], got 1e308",
+        ),
+        (
+            "lens_radius = 1e50",
+            "camera.lens.lens_radius",
+            "[1e-9, 1e9], got 1e50",
+        ),
+        (
+            "f_number = 0.024",
+            "camera.lens.f_number",
+            "f_number must be >= focal_length / (2 camera.near) = 0.025",
+        ),
+        (
+            "f_number = 1e-308",
+            "camera.lens.f_number",
+            "[0.001, 1e6], got 1e-308",
+        ),
+        ("f_number = 1e308", "camera.lens.f_number", "[0.001, 1e6]"),
+        (
+            "lens_radius = 0.01\ncoc = 1e300",
+            "camera.lens.coc",
+            "[1e-9, 1e9]",
+        ),
+        (
+            "lens_radius = 0.01\ndeep = inf",
+            "camera.lens.deep",
+            "[0, 1e9]",
+        ),
+    ] {
+        let needle = body.lines().last().unwrap();
+        assert_err(&lens(body), field, needle, has);
+    }
+}
+
+/// Vectors are exactly 3 finite numbers: a 4th element (even a string) is refused, not
+/// ignored.
+#[test]
+fn vectors_have_exactly_three_numbers() {
+    for (from, to, field) in [
+        (
+            "position = [0.0, 0.0, 0.0]",
+            "position = [0.0, 0.0, 0.0, 5.0]",
+            "camera.position",
+        ),
+        (
+            "look_at = [0.0, 0.0, -1.0]",
+            "look_at = [0, 0, -1, \"junk\"]",
+            "camera.look_at",
+        ),
+        (
+            "look_at = [0.0, 0.0, -1.0]",
+            "look_at = [0, 0]",
+            "camera.look_at",
+        ),
+    ] {
+        let text = BASE.replace(from, to).replace("{objects}", "");
+        assert_err(&text, field, to, "exactly 3 finite numbers");
+    }
+    let text = scene_text(
+        "[[object]]\nkind = \"quad\"\nvertices = [[0, 0, -5], [1, 0, -5], [1, 1, -5], [0, 1, -5, 9]]\n",
+    );
+    assert_err(
+        &text,
+        "object[0].vertices[3]",
+        "vertices",
+        "got an array of 4 values",
+    );
+}

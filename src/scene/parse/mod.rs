@@ -18,8 +18,8 @@ mod schema;
 use objects::{RawObject, object};
 pub(crate) use schema::hint;
 use schema::{
-    B_MAX, CONTRAST, COORD, F_NUMBER, FOV, GAMMA, INTENSITY, LENGTH, LENGTH0, REFRESH, Range, UNIT,
-    Vec3, WEBER, num,
+    B_MAX, CONTRAST, COORD, F_NUMBER, FAR_OVER_NEAR, FOV, GAMMA, INTENSITY, LENGTH, LENGTH0,
+    REFRESH, Range, UNIT, Vec3, WEBER, num,
 };
 
 type R<T> = Result<T, FileError>;
@@ -242,12 +242,15 @@ fn camera(c: &Ctx, r: &RawCamera) -> R<Camera> {
     let fov_y_deg = c.opt("camera.fov_y_deg", r.fov_y_deg, 45.0, FOV)?;
     let near = c.num("camera.near", r.near, LENGTH)?;
     let far = c.num("camera.far", r.far, LENGTH)?;
-    if far <= near {
+    // A view volume at least 0.1 % deep: the background's screen depth 1 / (1 - near / far)
+    // (the depth of field's infinity) stays <= 1001.
+    if far < FAR_OVER_NEAR * near {
         return Err(c.err(
             "camera.far",
             format!(
-                "must be a finite number > camera.near = {}, got {}",
+                "must be a finite number > camera.near = {}, at least {FAR_OVER_NEAR} camera.near = {} (a view volume at least 0.1 % deep), got {}",
                 num(near),
+                num(FAR_OVER_NEAR * near),
                 num(far)
             ),
         ));

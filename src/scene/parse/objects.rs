@@ -300,14 +300,19 @@ pub(super) fn object(c: &Ctx, p: &str, o: &RawObject, size: (u32, u32)) -> R<Obj
 /// A line width or light-point size in pixels (default 1), in `wide`: the bound keeps the
 /// footprint and the raster's loops finite.
 fn pixels(c: &Ctx, path: &str, x: Option<f64>, wide: Range) -> R<f64> {
-    c.opt(path, x, 1.0, wide).map_err(|mut e| {
-        e.msg = format!(
-            "{} pixels (twice the screen diagonal plus twice the largest guard band, {} pixels, on each side: a wider one covers nothing more)",
-            e.msg,
-            crate::scene::MAX_GUARD_BAND
-        );
-        e
-    })
+    let x = x.unwrap_or(1.0);
+    if wide.contains(x) {
+        return Ok(x);
+    }
+    Err(c.err(
+        path,
+        format!(
+            "must be {} pixels (twice the screen diagonal plus twice the largest guard band, {} pixels, on each side: a wider one covers nothing more), got {}",
+            wide.describe(),
+            crate::scene::MAX_GUARD_BAND,
+            num(x)
+        ),
+    ))
 }
 
 /// A vertex: every coordinate in [`super::schema::COORD`]; in screen space z (screen

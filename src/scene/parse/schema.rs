@@ -52,6 +52,8 @@ impl Range {
 pub(super) const COORD: Range = Range::Closed(-MAX_COORD, MAX_COORD);
 /// A positive length in scene units (radii, clipping planes, focal length, circle of confusion).
 pub(super) const LENGTH: Range = Range::Closed(MIN_LENGTH, MAX_COORD);
+/// `camera.far` at least this times `camera.near`.
+pub(super) const FAR_OVER_NEAR: f64 = 1.001;
 /// A length that may be 0 (the in-focus band's half-width).
 pub(super) const LENGTH0: Range = Range::Closed(0.0, MAX_COORD);
 /// A fraction (reflectance, ambient, background, screen depth).
@@ -117,7 +119,10 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         "camera.up" => format!("{}, not parallel to the view direction", vec3()),
         "camera.fov_y_deg" => format!("{} (degrees)", FOV.describe()),
         "camera.near" => format!("{} (scene units)", LENGTH.describe()),
-        "camera.far" => format!("{} (scene units), > camera.near", LENGTH.describe()),
+        "camera.far" => format!(
+            "{} (scene units), >= {FAR_OVER_NEAR} camera.near",
+            LENGTH.describe()
+        ),
         "camera.lens" => s("a table [camera.lens] with kind = \"pinhole\" or \"thin_lens\""),
         "camera.lens.kind" => s("\"pinhole\" or \"thin_lens\""),
         "camera.lens.focal_length" => format!("{} (scene units)", LENGTH.describe()),

@@ -1,230 +1,8 @@
-//! TOML input files: parsing with serde and locating fields for error messages.
-//!
-//! `serde` with `deny_unknown_fields` rejects unknown keys and wrong types with a span;
-//! semantic validation afterwards names a dotted field path, and [`TomlFile::locate`]
-//! turns that path back into a line and column of the user's text.
+//! The words of the TOML layer's messages: serde's errors rephrased with the field path,
+//! what was found and what is expected, and the dotted path of each line of a text that may
+//! not parse (for syntax errors).
 
-use crate::error::FileError;
-use serde::de::DeserializeOwned;
-use toml::de::{DeTable, DeValue};
-
-/// What a field expects, by dotted path (`object[2].radius` -> `a finite number in [1e-9,
-/// 1e9]`): the type and the allowed range, for messages. `None`: no hint.
-pub type Hint<'a> = &'a dyn Fn(&str) -> Option<String>;
-
-/// The text of one TOML file plus its name, kept for error messages.
-pub struct TomlFile {
-    /// File name as given by the user.
-    pub name: String,
-    /// Full text.
-    pub text: String,
-}
-
-/// One step of a field path: a table key or an array index.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Seg {
-    /// `key`
-    Key(String),
-    /// `[i]`
-    Index(usize),
-}
-
-/// Parses a dotted path like `object[2].radius` into segments.
-pub fn parse_path(path: &str) -> Vec<Seg> {
-    let mut out = Vec::new();
-    for part in path.split('.') {
-        let mut rest = part;
-        if let Some(b) = rest.find('[') {
-            if b > 0 {
-                out.push(Seg::Key(rest[..b].to_string()));
-            }
-            rest = &rest[b..];
-            while let Some(stripped) = rest.strip_prefix('[') {
-                let end = stripped.find(']').unwrap_or(stripped.len());
-                if let Ok(i) = stripped[..end].parse() {
-                    out.push(Seg::Index(i));
-                }
-                rest = stripped.get(end + 1..).unwrap_or("");
-            }
-        } else if !rest.is_empty() {
-            out.push(Seg::Key(rest.to_string()));
-        }
-    }
-    out
-}
-
-impl TomlFile {
-    /// Reads a file from disk.
-    pub fn read(path: &str) -> Result<Self, FileError> {
-        let text = std::fs::read_to_string(path).map_err(|e| FileError {
-            file: path.to_string(),
-            line: None,
-            col: None,
-            field: String::new(),
-            msg: format!("cannot read the file: {e}"),
-        })?;
-        Ok(Self {
-            name: path.to_string(),
-            text,
-        })
-    }
-
-    /// Wraps an in-memory text (an embedded default, a test).
-    pub fn from_text(name: &str, text: &str) -> Self {
-        Self {
-            name: name.to_string(),
-            text: text.to_string(),
-        }
-    }
-
-    /// Deserialises the whole file. Syntax errors, unknown fields and wrong types come back
-    /// with line, column and the dotted path of the field (no hint of the expected value:
-    /// see [`TomlFile::parse_with`]).
-    pub fn parse<T: DeserializeOwned>(&self) -> Result<T, FileError> {
-        self.parse_with(&|_| None)
-    }
-
-    /// Deserialises the whole file; every error names the dotted field path
-    /// (`object[2].tessellation`), what was found and what is expected. `hint` gives, for a
-    /// field path, what the field expects (type and allowed range: `an integer in
-    /// 3..=1024`); without one the message names the serde type (`an integer`).
-    pub fn parse_with<T: DeserializeOwned>(&self, hint: Hint<'_>) -> Result<T, FileError> {
-        let de = toml::Deserializer::parse(&self.text).map_err(|e| self.syntax_error(&e, hint))?;
-        serde_path_to_error::deserialize(de).map_err(|e| self.type_error(e, hint))
-    }
-
-    /// A TOML syntax error (including a duplicate key or table): the field is the key or
-    /// table header of the line the error is on.
-    fn syntax_error(&self, e: &toml::de::Error, hint: Hint<'_>) -> FileError {
-        let offset = e.span().map_or(self.text.len(), |s| s.start);
-        let (line, col) = self.line_col(offset);
-        let lines = line_paths(&self.text);
-        let here = lines.get(line - 1).cloned().unwrap_or_default();
-        let field = here.path.clone();
-        let first = e.message().lines().next().unwrap_or("invalid TOML").trim();
-        let msg = if first.starts_with("duplicate key") {
-            let earlier = lines[..line - 1]
-                .iter()
-                .position(|l| l.defines && l.path == field)
-                .map(|k| format!(" (first at line {})", k + 1))
-                .unwrap_or_default();
-            if here.header {
-                format!(
-                    "duplicate table: [{field}] is given twice{earlier}; write its fields under one header"
-                )
-            } else {
-                format!("duplicate key: given twice{earlier}; keep one of them")
-            }
-        } else {
-            let expects = hint(&field)
-                .map(|h| format!("; `{field}` expects {h}"))
-                .unwrap_or_default();
-            format!("invalid TOML: {first}{expects}")
-        };
-        FileError {
-            file: self.name.clone(),
-            line: Some(line),
-            col: Some(col),
-            field,
-            msg,
-        }
-    }
-
-    /// A serde error (wrong type or value, unknown or missing field) at a field path.
-    fn type_error(
-        &self,
-        e: serde_path_to_error::Error<toml::de::Error>,
-        hint: Hint<'_>,
-    ) -> FileError {
-        let path = e.path().to_string();
-        let path = if path == "." { String::new() } else { path };
-        let inner = e.into_inner();
-        let span = inner.span();
-        let found = span
-            .as_ref()
-            .and_then(|s| self.text.get(s.clone()))
-            .unwrap_or("");
-        let raw = inner.message().lines().next().unwrap_or("invalid value");
-        let (field, msg, relocate) = describe(&path, raw, found, hint);
-        let span = if relocate { None } else { span };
-        let (line, col) = match span {
-            Some(s) => {
-                let (l, c) = self.line_col(s.start);
-                (Some(l), Some(c))
-            }
-            None => match self.locate(&field) {
-                Some((l, c)) => (Some(l), Some(c)),
-                None => (Some(1), Some(1)),
-            },
-        };
-        FileError {
-            file: self.name.clone(),
-            line,
-            col,
-            field,
-            msg,
-        }
-    }
-
-    /// 1-based line and column of a byte offset.
-    pub fn line_col(&self, offset: usize) -> (usize, usize) {
-        let before = &self.text[..offset.min(self.text.len())];
-        let line = before.matches('\n').count() + 1;
-        let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-        (line, col)
-    }
-
-    /// Line and column of a field given as a dotted path, if it is present in the text.
-    /// Falls back to the nearest enclosing table that is present.
-    pub fn locate(&self, path: &str) -> Option<(usize, usize)> {
-        let doc = DeTable::parse(&self.text).ok()?;
-        let segs = parse_path(path);
-        let mut best: Option<usize> = None;
-        let mut table: &DeTable<'_> = doc.get_ref();
-        let mut value: Option<&DeValue<'_>> = None;
-        for seg in &segs {
-            match seg {
-                Seg::Key(k) => {
-                    let t = match value {
-                        None => table,
-                        Some(DeValue::Table(t)) => t,
-                        _ => break,
-                    };
-                    let Some((key, v)) = t.get_key_value(k.as_str()) else {
-                        break;
-                    };
-                    best = Some(key.span().start);
-                    table = t;
-                    value = Some(v.get_ref());
-                }
-                Seg::Index(i) => {
-                    let Some(DeValue::Array(a)) = value else {
-                        break;
-                    };
-                    let Some(v) = a.get(*i) else { break };
-                    best = Some(v.span().start);
-                    value = Some(v.get_ref());
-                }
-            }
-        }
-        best.map(|o| self.line_col(o))
-    }
-
-    /// Builds a located error for a field path.
-    pub fn error(&self, field: &str, msg: impl Into<String>) -> FileError {
-        let (line, col) = match self.locate(field) {
-            Some((l, c)) => (Some(l), Some(c)),
-            None => (None, None),
-        };
-        FileError {
-            file: self.name.clone(),
-            line,
-            col,
-            field: field.to_string(),
-            msg: msg.into(),
-        }
-    }
-}
+use super::Hint;
 
 /// A number as messages print it: `1e9`, `1e-9`, `0.035`, `NaN` (never 300 digits).
 pub fn num(x: f64) -> String {
@@ -277,7 +55,12 @@ fn names(list: &str) -> String {
 /// The field path and the message of a serde error `raw` at `path`; `found` is the text of
 /// the value the error points at. The flag: the error is about an enclosing table, locate
 /// it by its path rather than by the error's span.
-fn describe(path: &str, raw: &str, found: &str, hint: Hint<'_>) -> (String, String, bool) {
+pub(super) fn describe(
+    path: &str,
+    raw: &str,
+    found: &str,
+    hint: Hint<'_>,
+) -> (String, String, bool) {
     // A table written as an array of tables (`[[image]]`): serde reads a struct from a
     // sequence positionally, so the error lands on an element of it; name the table.
     let mut prefix = String::new();
@@ -422,19 +205,19 @@ fn expected_type(e: &str) -> String {
 
 /// What one line of a TOML text is, for locating syntax errors.
 #[derive(Clone, Debug, Default)]
-struct LinePath {
+pub(super) struct LinePath {
     /// Dotted path of the key or table the line belongs to.
-    path: String,
+    pub(super) path: String,
     /// The line is a table header (`[a]`, `[[a]]`).
-    header: bool,
+    pub(super) header: bool,
     /// The line defines its path (a header, or `key = ...`), rather than continuing one.
-    defines: bool,
+    pub(super) defines: bool,
 }
 
 /// The dotted path of each line of a TOML text, found by reading headers and keys as text
 /// (the text may not parse): `[[object]]` headers are counted to give `object[k]`; a line
 /// that continues a multi-line value, a comment and a blank line belong to the last key.
-fn line_paths(text: &str) -> Vec<LinePath> {
+pub(super) fn line_paths(text: &str) -> Vec<LinePath> {
     let key_of = |k: &str| -> String {
         k.split('.')
             .map(|p| p.trim().trim_matches(['"', '\'']))
@@ -475,6 +258,8 @@ fn line_paths(text: &str) -> Vec<LinePath> {
                     let n = counts.entry(generic).or_insert(0);
                     *n += 1;
                     path = format!("{path}[{}]", *n - 1);
+                } else if last_part {
+                    // `[a]` names a table, even where `a` is an array of tables (an error).
                 } else if let Some(n) = counts.get(&generic) {
                     path = format!("{path}[{}]", n - 1);
                 }
@@ -511,37 +296,4 @@ fn line_paths(text: &str) -> Vec<LinePath> {
         }
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn locates_nested_fields_and_array_items() {
-        let f = TomlFile::from_text(
-            "t.toml",
-            "[camera]\nnear = 1.0\n\n[[object]]\nkind = \"sphere\"\n\n[[object]]\nkind = \"torus\"\nradius = -1\n",
-        );
-        assert_eq!(f.locate("camera.near"), Some((2, 1)));
-        assert_eq!(f.locate("object[1].radius"), Some((9, 1)));
-        // A missing field falls back to its table.
-        assert_eq!(f.locate("object[1].missing"), f.locate("object[1]"));
-        assert!(f.locate("object[1]").is_some());
-        assert!(f.locate("nothing").is_none());
-    }
-
-    #[test]
-    fn syntax_errors_have_a_line() {
-        #[derive(serde::Deserialize, Debug)]
-        #[serde(deny_unknown_fields)]
-        #[allow(dead_code)]
-        struct T {
-            a: u32,
-        }
-        let f = TomlFile::from_text("t.toml", "a = 1\nb = 2\n");
-        let e = f.parse::<T>().unwrap_err();
-        assert_eq!(e.line, Some(2));
-        assert!(e.msg.contains("unknown field"), "{}", e.msg);
-    }
 }
