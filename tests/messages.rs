@@ -1126,3 +1126,145 @@ fn hints_and_validation_agree() {
     assert!(Scene::field_hint("object[3].nothing").is_none());
     assert!(HwConfig::field_hint("cycles.nothing.lanes").is_none());
 }
+
+/// Every number of a hardware file has a finite range: NaN, infinities, huge and negative
+/// values are refused with the field's name, for every real and every integer field (the
+/// dither's seed and frame number take any value of their type).
+#[test]
+fn hardware_numbers_refuse_nan_inf_and_values_out_of_range() {
+    let reals = [
+        ("accumulate", "gaussian_sigma"),
+        ("gamma", "gamma"),
+        ("cycles", "clock_mhz"),
+        ("dof", "p"),
+        ("dof", "k"),
+    ];
+    let mut integers: Vec<(String, &str)> = [
+        ("raster", "samples"),
+        ("raster", "interp_guard_bits"),
+        ("raster", "guard_band"),
+        ("accumulate", "weight_bits"),
+        ("gamma", "dac_bits"),
+        ("cycles", "tile"),
+        ("cycles", "frame_port_bits"),
+        ("dither", "frac_bits"),
+        ("dither", "blue_noise_size"),
+        ("dof", "coef_bits"),
+        ("dof", "alpha_bits"),
+        ("dof", "guard_bits"),
+        ("dof", "line_bits"),
+        ("dof", "acc_bits"),
+        ("dof", "max_half_size"),
+        ("coding", "log_bits"),
+        ("coding", "acc_frac_bits"),
+        ("coding", "table_addr_bits"),
+        ("coding", "table_frac_bits"),
+    ]
+    .into_iter()
+    .map(|(s, f)| (s.to_string(), f))
+    .collect();
+    for stage in igemu::config::TIMED {
+        for (f, _, _) in igemu::config::TIMING_RANGES {
+            integers.push((format!("cycles.{}", stage.name()), f));
+        }
+    }
+    let refused = |section: &str, field: &str, value: &str| {
+        let text = format!("[{section}]\n{field} = {value}\n");
+        let e = HwConfig::from_toml(&TomlFile::from_text("h.toml", &text))
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {text}"));
+        assert_eq!(e.field, format!("{section}.{field}"), "{text}: {e}");
+        assert_eq!(e.line, Some(2), "{e}");
+        let hint = HwConfig::field_hint(&e.field).expect("every field has a hint");
+        assert!(
+            e.msg.contains("must be") || e.msg.contains(&hint),
+            "{text}: {e}"
+        );
+    };
+    for (section, field) in reals {
+        for v in ["nan", "inf", "-inf", "1e308", "-1e308", "0", "\"1\""] {
+            refused(section, field, v);
+        }
+    }
+    for (section, field) in &integers {
+        for v in [
+            "4294967295",
+            "4294967296",
+            "-1",
+            "1.5",
+            "nan",
+            "\"8\"",
+            "[8]",
+        ] {
+            refused(section, field, v);
+        }
+    }
+    // The seed and the frame number take any value of their type, and nothing else.
+    for (field, max) in [("seed", "18446744073709551615"), ("frame", "4294967295")] {
+        let text = format!("[dither]\n{field} = {max}\n");
+        HwConfig::from_toml(&TomlFile::from_text("h.toml", &text)).unwrap();
+        for v in ["-1", "1.5", "nan", "\"1\""] {
+            refused("dither", field, v);
+        }
+    }
+}
+
+/// Every number of a scene has a finite range: each number of the base scene (a scalar or
+/// an element of a vector) replaced by NaN, an infinity or ±1e308 is refused, naming that
+/// field.
+#[test]
+fn scene_numbers_refuse_nan_inf_and_huge_values() {
+    let (mut table, mut objects, mut lights) = (String::new(), 0, 0);
+    let mut checked = 0;
+    for (k, line) in SCENE.lines().enumerate() {
+        if line == "[[object]]" {
+            table = format!("object[{objects}]");
+            objects += 1;
+            continue;
+        }
+        if line == "[[light]]" {
+            table = format!("light[{lights}]");
+            lights += 1;
+            continue;
+        }
+        if let Some(h) = line.strip_prefix('[') {
+            table = h.trim_end_matches(']').to_string();
+            continue;
+        }
+        let Some((key, value)) = line.split_once(" = ") else {
+            continue;
+        };
+        let path = format!("{table}.{key}");
+        let mut lines: Vec<String> = SCENE.lines().map(String::from).collect();
+        let mut try_value = |field: &str, new: String| {
+            lines[k] = new;
+            let text = lines.join("\n");
+            let e = Scene::from_toml(&TomlFile::from_text("m.toml", &text))
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {}", lines[k]));
+            assert_eq!(e.field, field, "{}: {e}", lines[k]);
+            assert_eq!(e.line, Some(k + 1), "{e}");
+            checked += 1;
+        };
+        for bad in ["nan", "inf", "-inf", "1e308", "-1e308"] {
+            if value.parse::<f64>().is_ok() {
+                try_value(&path, format!("{key} = {bad}"));
+            } else if value.starts_with('[') && !value.starts_with("[[") {
+                let n = value.matches(',').count() + 1;
+                for i in 0..n {
+                    let mut xs: Vec<String> = value
+                        .trim_matches(['[', ']'])
+                        .split(", ")
+                        .map(String::from)
+                        .collect();
+                    xs[i] = bad.to_string();
+                    try_value(
+                        &format!("{path}[{i}]"),
+                        format!("{key} = [{}]", xs.join(", ")),
+                    );
+                }
+            }
+        }
+    }
+    assert!(checked > 200, "{checked}");
+}

@@ -1004,3 +1004,44 @@ fn vectors_have_exactly_three_numbers() {
         "got an array of 4 values",
     );
 }
+
+/// `primitive_count` is what the front end gets, and a scene is limited to `MAX_PRIMITIVES`
+/// (memory grows with the primitives: five spheres at the largest tessellation are refused,
+/// naming the fifth's tessellation).
+#[test]
+fn primitives_are_counted_and_bounded() {
+    for t in [3, 4, 5, 16, 33] {
+        for capped in [true, false] {
+            let objects = format!(
+                "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, -5]\nradius = 1\ntessellation = {t}\n\n\
+                 [[object]]\nkind = \"torus\"\ncenter = [0, 0, -5]\naxis = [0, 1, 0]\nmajor_radius = 2\nminor_radius = 1\ntessellation = {t}\n\n\
+                 [[object]]\nkind = \"cone\"\nbase = [0, 0, -5]\naxis = [0, 1, 0]\nradius = 1\ntessellation = {t}\ncapped = {capped}\n\n\
+                 [[object]]\nkind = \"cylinder\"\nbase = [0, 0, -5]\naxis = [0, 1, 0]\nradius = 1\ntessellation = {t}\ncapped = {capped}\n"
+            );
+            for o in &scene(&objects).objects {
+                let m = tessellate(o).unwrap();
+                assert_eq!(primitive_count(o), m.triangles.len() as u64, "{o:?}");
+            }
+        }
+    }
+    let s = scene(&format!(
+        "{}{}",
+        tri_block(),
+        "[[object]]\nkind = \"quad\"\nvertices = [[0, 0, -5], [1, 0, -5], [1, 1, -5], [0, 1, -5]]\n"
+    ));
+    let h = front_end(&s, &GuardBand::around(64, 48, 16.0));
+    let counted: u64 = s.objects.iter().map(primitive_count).sum();
+    assert_eq!(counted, h.stats.triangles_in as u64);
+
+    let sphere =
+        "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, -5]\nradius = 1\ntessellation = 1024\n\n";
+    scene(&sphere.repeat(4));
+    let text = scene_text(&sphere.repeat(5));
+    let e = parse_err(&text);
+    assert_eq!(e.field, "object[4].tessellation", "{e}");
+    assert!(e.msg.contains("more than the 4194304"), "{e}");
+}
+
+fn tri_block() -> &'static str {
+    "[[object]]\nkind = \"triangle\"\nvertices = [[0, 0, -5], [1, 0, -5], [0, 1, -5]]\n\n"
+}

@@ -30,7 +30,7 @@ use serde::Serialize;
 
 pub use project::{depth_from_screen_z, front_end, screen_z};
 pub use shade::shade_vertex;
-pub use tessellate::{Mesh, tessellate};
+pub use tessellate::{Mesh, primitive_count, tessellate};
 
 /// Largest accepted image width and height, in pixels (`image.width`, `image.height` are in
 /// `1..=MAX_RESOLUTION`).
@@ -59,6 +59,11 @@ pub const MAX_INTENSITY: f64 = 1e6;
 /// is in `0..=MAX_GUARD_BAND`). It bounds the line widths and light-point sizes of a scene:
 /// at most `2 (screen diagonal + 2 MAX_GUARD_BAND)` pixels.
 pub const MAX_GUARD_BAND: u32 = 4096;
+
+/// Most primitives a scene may put into the front end (tessellated triangles, raw triangles
+/// (a quad counts 2), lines and light points): four spheres at the largest tessellation. It
+/// bounds the host's and the pipeline's per-primitive memory (a few hundred bytes each).
+pub const MAX_PRIMITIVES: u64 = 1 << 22;
 
 /// Embedded scenes by name: `(name, TOML text)`. [`Scene::embedded`] looks names up here.
 pub const EMBEDDED: &[(&str, &str)] = &[

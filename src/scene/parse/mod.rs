@@ -7,7 +7,10 @@
 //! that does not belong to its kind get their own precise messages.
 
 use super::vec3::{cross, norm, normalize, sub};
-use super::{Camera, Display, ImageSpec, Lens, Light, MAX_RESOLUTION, Scene, Shading};
+use super::{
+    Camera, Display, ImageSpec, Lens, Light, MAX_PRIMITIVES, MAX_RESOLUTION, Object, Scene,
+    Shading, primitive_count, tessellate,
+};
 use crate::error::FileError;
 use crate::files::TomlFile;
 use serde::Deserialize;
@@ -199,6 +202,7 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         .enumerate()
         .map(|(k, o)| object(&c, &format!("object[{k}]"), o, (image.width, image.height)))
         .collect::<R<Vec<_>>>()?;
+    primitives(&c, &objects)?;
     Ok(Scene {
         name,
         image,
@@ -208,6 +212,36 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         lights,
         objects,
     })
+}
+
+/// The scene's primitives stay within [`MAX_PRIMITIVES`]: the error names the object that
+/// crosses the limit (its tessellation, for a canonical object).
+fn primitives(c: &Ctx, objects: &[Object]) -> R<()> {
+    let mut total = 0u64;
+    for (k, o) in objects.iter().enumerate() {
+        let n = primitive_count(o);
+        total += n;
+        if total > MAX_PRIMITIVES {
+            let tessellated = tessellate(o).is_some();
+            let field = if tessellated {
+                format!("object[{k}].tessellation")
+            } else {
+                format!("object[{k}]")
+            };
+            let fix = if tessellated {
+                "lower the tessellation of this object or of the ones before it"
+            } else {
+                "draw fewer objects"
+            };
+            return Err(c.err(
+                &field,
+                format!(
+                    "the objects up to this one make {total} primitives (this one {n}), more than the {MAX_PRIMITIVES} a scene may have; {fix}"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `dir/name.toml` -> `name`.
