@@ -1268,3 +1268,28 @@ fn scene_numbers_refuse_nan_inf_and_huge_values() {
     }
     assert!(checked > 200, "{checked}");
 }
+
+/// A file cut at any byte is refused without a panic, naming a field and a line (or, cut at a
+/// line that leaves a valid file, accepted).
+#[test]
+fn files_cut_anywhere_name_a_field_and_a_line() {
+    for (base, is_scene) in [(SCENE, true), (HW, false)] {
+        let mut refused = 0;
+        for end in (0..base.len()).filter(|&i| base.is_char_boundary(i)) {
+            let t = &base[..end];
+            let file = TomlFile::from_text("cut.toml", t);
+            let e = if is_scene {
+                Scene::from_toml(&file).err()
+            } else {
+                HwConfig::from_toml(&file).err()
+            };
+            if let Some(e) = e {
+                refused += 1;
+                assert!(!e.field.is_empty(), "cut at {end}: {e}");
+                assert!(e.line.is_some() && e.col.is_some(), "cut at {end}: {e}");
+                assert!(e.to_string().starts_with("cut.toml:"), "cut at {end}: {e}");
+            }
+        }
+        assert!(refused > base.len() / 2, "{refused}");
+    }
+}
