@@ -689,13 +689,13 @@ fn nan_inf_and_ranges_are_rejected_with_the_field_and_line() {
         &sphere("nan"),
         "object[0].radius",
         "radius",
-        "must be a finite number > 0, got NaN",
+        "must be a finite number in [1e-9, 1e9], got NaN",
     );
     assert_err(
         &sphere("-1"),
         "object[0].radius",
         "radius",
-        "must be a finite number > 0, got -1",
+        "must be a finite number in [1e-9, 1e9], got -1",
     );
     assert_err(&sphere("inf"), "object[0].radius", "radius", "got inf");
     let text = scene_text("[[object]]\nkind = \"sphere\"\ncenter = [0, -inf, -5]\nradius = 1\n");
@@ -717,11 +717,11 @@ fn nan_inf_and_ranges_are_rejected_with_the_field_and_line() {
     let text = BASE
         .replace("near = 1.0", "near = 0.0")
         .replace("{objects}", "");
-    assert_err(&text, "camera.near", "near = 0.0", "> 0");
+    assert_err(&text, "camera.near", "near = 0.0", "in [1e-9, 1e9], got 0");
     let text = BASE
         .replace("fov_y_deg = 60.0", "fov_y_deg = 180.0")
         .replace("{objects}", "");
-    assert_err(&text, "camera.fov_y_deg", "fov_y_deg", "in (0, 180)");
+    assert_err(&text, "camera.fov_y_deg", "fov_y_deg", "in [0.001, 180)");
     let text = BASE
         .replace("background = 0.0", "background = 1.5")
         .replace("{objects}", "");
@@ -736,14 +736,24 @@ fn nan_inf_and_ranges_are_rejected_with_the_field_and_line() {
         &display("contrast = 1.0"),
         "display.contrast",
         "contrast",
-        "> 1",
+        "in [2, 1e9]",
     );
     assert_err(&display("gamma = 5.5"), "display.gamma", "gamma", "(1, 5]");
-    assert_err(&display("weber = 1.0"), "display.weber", "weber", "(0, 1)");
-    assert_err(&display("b_max = -3"), "display.b_max", "b_max", "> 0");
+    assert_err(
+        &display("weber = 1.0"),
+        "display.weber",
+        "weber",
+        "[0.001, 0.5]",
+    );
+    assert_err(
+        &display("b_max = -3"),
+        "display.b_max",
+        "b_max",
+        "[0.01, 1e6]",
+    );
 
     let light = scene_text("[[light]]\ndirection = [0, 1, 0]\nintensity = -0.5\n");
-    assert_err(&light, "light[0].intensity", "intensity", ">= 0");
+    assert_err(&light, "light[0].intensity", "intensity", "in [0, 1e6]");
     let light = scene_text("[[light]]\ndirection = [0, 0, 0]\n");
     assert_err(&light, "light[0].direction", "direction", "non-zero");
 
@@ -765,7 +775,7 @@ fn nan_inf_and_ranges_are_rejected_with_the_field_and_line() {
         "3..=1024",
     );
     let e = parse_err(&cone(""));
-    assert_eq!(e.field, "object[0]", "{e}");
+    assert_eq!(e.field, "object[0].axis", "{e}");
     assert!(e.msg.contains("missing field `axis`"), "{e}");
 
     let torus = scene_text(
@@ -798,7 +808,7 @@ fn screen_space_and_lens_rules() {
     assert!(e.msg.contains("missing field `intensity`"), "{e}");
     let t = tri("intensity = [1, -1, 1]")
         .replace("vertices = [[0, 0, 0.5], [10, 0, 0.5], [0, 10, 1.5]]", ok);
-    assert_err(&t, "object[0].intensity[1]", "intensity", ">= 0");
+    assert_err(&t, "object[0].intensity[1]", "intensity", "in [0, 1e6]");
     let t = tri("intensity = [1, 1]")
         .replace("vertices = [[0, 0, 0.5], [10, 0, 0.5], [0, 10, 1.5]]", ok);
     assert_err(&t, "object[0].intensity", "intensity", "3 finite numbers");
@@ -873,4 +883,165 @@ fn errors_from_files_on_disk_name_the_file() {
     let missing = Scene::load(dir.join("missing.toml").to_str().unwrap()).unwrap_err();
     assert!(missing.msg.contains("cannot read"), "{missing}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+// ---------------------------------------------------------------- bounds (issue 13)
+
+/// The bounds that keep every loop finite accept their edges, refuse beyond them, and the
+/// widest accepted line and light point render at once (a line of width 1e308 hung).
+#[test]
+fn line_widths_point_sizes_and_the_lens_are_bounded() {
+    // 64 x 48: diagonal 80, bound 2 (80 + 2 * 4096) = 16544 pixels.
+    let widest = "[[object]]\nkind = \"line\"\nspace = \"screen\"\nfrom = [-10, 5, 0.5]\nto = [70, 40, 0.5]\nintensity = 1\nwidth = 16544\n\n[[object]]\nkind = \"light_point\"\nspace = \"screen\"\nposition = [20, 20, 0.4]\nintensity = 1\nsize = 16544\n";
+    let s = scene(widest);
+    let t = std::time::Instant::now();
+    let hw = igemu::config::HwConfig::default_config();
+    let r = igemu::pipeline::render(&s, &hw, igemu::stage::RunOptions::FAST).unwrap();
+    assert!(r.dac.iter().all(|&c| c > 0), "the line covers the screen");
+    assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+    let wider = scene_text(&widest.replacen("width = 16544", "width = 16544.5", 1));
+    assert_err(
+        &wider,
+        "object[0].width",
+        "width = 16544.5",
+        "(0, 16544] pixels",
+    );
+    let huge = scene_text(&widest.replacen("size = 16544", "size = 1e308", 1));
+    assert_err(&huge, "object[1].size", "size = 1e308", "got 1e308");
+
+    // A view volume at least 0.1 % deep (the background's screen depth stays <= 1001).
+    let thin = BASE
+        .replace("far = 100.0", "far = 1.0005")
+        .replace("{objects}", "");
+    assert_err(
+        &thin,
+        "camera.far",
+        "far = 1.0005",
+        "at least 1.001 camera.near",
+    );
+
+    // The lens: lens_radius up to camera.near (1 in BASE), f_number down to F / (2 near).
+    let lens = |body: &str| {
+        BASE.replace("{objects}", &format!("[camera.lens]\nkind = \"thin_lens\"\nfocal_length = 0.05\nfocus_distance = 10\n{body}\n"))
+    };
+    let ok = |body: &str| Scene::from_toml(&TomlFile::from_text("t.toml", &lens(body))).unwrap();
+    ok("lens_radius = 1.0");
+    ok("f_number = 0.025");
+    for (body, field, has) in [
+        (
+            "lens_radius = 1.0001",
+            "camera.lens.lens_radius",
+            "camera.near = 1",
+        ),
+        (
+            "lens_radius = 1e308",
+            "camera.lens.lens_radius",
+            "[1e-9, 1e9], got 1e308",
+        ),
+        (
+            "lens_radius = 1e50",
+            "camera.lens.lens_radius",
+            "[1e-9, 1e9], got 1e50",
+        ),
+        (
+            "f_number = 0.024",
+            "camera.lens.f_number",
+            "f_number must be >= focal_length / (2 camera.near) = 0.025",
+        ),
+        (
+            "f_number = 1e-308",
+            "camera.lens.f_number",
+            "[0.001, 1e6], got 1e-308",
+        ),
+        ("f_number = 1e308", "camera.lens.f_number", "[0.001, 1e6]"),
+        (
+            "lens_radius = 0.01\ncoc = 1e300",
+            "camera.lens.coc",
+            "[1e-9, 1e9]",
+        ),
+        (
+            "lens_radius = 0.01\ndeep = inf",
+            "camera.lens.deep",
+            "[0, 1e9]",
+        ),
+    ] {
+        let needle = body.lines().last().unwrap();
+        assert_err(&lens(body), field, needle, has);
+    }
+}
+
+/// Vectors are exactly 3 finite numbers: a 4th element (even a string) is refused, not
+/// ignored.
+#[test]
+fn vectors_have_exactly_three_numbers() {
+    for (from, to, field) in [
+        (
+            "position = [0.0, 0.0, 0.0]",
+            "position = [0.0, 0.0, 0.0, 5.0]",
+            "camera.position",
+        ),
+        (
+            "look_at = [0.0, 0.0, -1.0]",
+            "look_at = [0, 0, -1, \"junk\"]",
+            "camera.look_at",
+        ),
+        (
+            "look_at = [0.0, 0.0, -1.0]",
+            "look_at = [0, 0]",
+            "camera.look_at",
+        ),
+    ] {
+        let text = BASE.replace(from, to).replace("{objects}", "");
+        assert_err(&text, field, to, "exactly 3 finite numbers");
+    }
+    let text = scene_text(
+        "[[object]]\nkind = \"quad\"\nvertices = [[0, 0, -5], [1, 0, -5], [1, 1, -5], [0, 1, -5, 9]]\n",
+    );
+    assert_err(
+        &text,
+        "object[0].vertices[3]",
+        "vertices",
+        "got an array of 4 values",
+    );
+}
+
+/// `primitive_count` is what the front end gets, and a scene is limited to `MAX_PRIMITIVES`
+/// (memory grows with the primitives: five spheres at the largest tessellation are refused,
+/// naming the fifth's tessellation).
+#[test]
+fn primitives_are_counted_and_bounded() {
+    for t in [3, 4, 5, 16, 33] {
+        for capped in [true, false] {
+            let objects = format!(
+                "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, -5]\nradius = 1\ntessellation = {t}\n\n\
+                 [[object]]\nkind = \"torus\"\ncenter = [0, 0, -5]\naxis = [0, 1, 0]\nmajor_radius = 2\nminor_radius = 1\ntessellation = {t}\n\n\
+                 [[object]]\nkind = \"cone\"\nbase = [0, 0, -5]\naxis = [0, 1, 0]\nradius = 1\ntessellation = {t}\ncapped = {capped}\n\n\
+                 [[object]]\nkind = \"cylinder\"\nbase = [0, 0, -5]\naxis = [0, 1, 0]\nradius = 1\ntessellation = {t}\ncapped = {capped}\n"
+            );
+            for o in &scene(&objects).objects {
+                let m = tessellate(o).unwrap();
+                assert_eq!(primitive_count(o), m.triangles.len() as u64, "{o:?}");
+            }
+        }
+    }
+    let s = scene(&format!(
+        "{}{}",
+        tri_block(),
+        "[[object]]\nkind = \"quad\"\nvertices = [[0, 0, -5], [1, 0, -5], [1, 1, -5], [0, 1, -5]]\n"
+    ));
+    let h = front_end(&s, &GuardBand::around(64, 48, 16.0));
+    let counted: u64 = s.objects.iter().map(primitive_count).sum();
+    assert_eq!(counted, h.stats.triangles_in as u64);
+
+    let sphere =
+        "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, -5]\nradius = 1\ntessellation = 1024\n\n";
+    scene(&sphere.repeat(4));
+    let text = scene_text(&sphere.repeat(5));
+    let e = parse_err(&text);
+    assert_eq!(e.field, "object[4].tessellation", "{e}");
+    assert!(e.msg.contains("more than the 4194304"), "{e}");
+}
+
+fn tri_block() -> &'static str {
+    "[[object]]\nkind = \"triangle\"\nvertices = [[0, 0, -5], [1, 0, -5], [0, 1, -5]]\n\n"
 }

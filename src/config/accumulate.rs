@@ -4,6 +4,11 @@ use super::set;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
 use serde::{Deserialize, Serialize};
 
+/// `accumulate.weight_bits` at most (the lower bound is `2 log2(samples)`).
+pub const MAX_WEIGHT_BITS: u32 = 16;
+/// `accumulate.gaussian_sigma`, pixels.
+pub const GAUSSIAN_SIGMA: std::ops::RangeInclusive<f64> = 0.1..=2.0;
+
 /// Filter used to turn sub-pixel samples into pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -6,6 +6,20 @@ use super::set;
 use crate::stage_id::StageId;
 use serde::{Deserialize, Serialize};
 
+/// `cycles.clock_mhz` (and `--clock-mhz`), MHz: 1 kHz to 10 GHz.
+pub const CLOCK_MHZ: std::ops::RangeInclusive<f64> = 0.001..=10_000.0;
+/// `cycles.tile`, pixels: a power of two in this range.
+pub const TILE: std::ops::RangeInclusive<u32> = 4..=256;
+/// `cycles.frame_port_bits`.
+pub const FRAME_PORT_BITS: std::ops::RangeInclusive<u32> = 1..=4096;
+/// The fields of a `[cycles.<stage>]` table and their ranges.
+pub const TIMING_RANGES: [(&str, u32, u32); 4] = [
+    ("lanes", 1, 1024),
+    ("latency", 0, 1024),
+    ("ii", 1, 64),
+    ("fifo", 1, 65536),
+];
+
 /// Timing of one stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct StageTiming {
@@ -126,29 +140,32 @@ impl CyclesCfg {
         if let Err(m) = check_clock(self.clock_mhz) {
             return err("clock_mhz", m);
         }
-        if !(self.tile.is_power_of_two() && (4..=256).contains(&self.tile)) {
+        if !(self.tile.is_power_of_two() && TILE.contains(&self.tile)) {
             return err(
                 "tile",
                 format!(
-                    "must be a power of two in 4..=256 pixels, got {}",
+                    "must be a power of two in {}..={} pixels, got {}",
+                    TILE.start(),
+                    TILE.end(),
                     self.tile
                 ),
             );
         }
-        if !(1..=4096).contains(&self.frame_port_bits) {
+        if !FRAME_PORT_BITS.contains(&self.frame_port_bits) {
             return err(
                 "frame_port_bits",
-                format!("must be in 1..=4096, got {}", self.frame_port_bits),
+                format!(
+                    "must be in {}..={}, got {}",
+                    FRAME_PORT_BITS.start(),
+                    FRAME_PORT_BITS.end(),
+                    self.frame_port_bits
+                ),
             );
         }
         for id in TIMED {
             let t = self.timing(id).expect("every timed stage has a timing");
-            for (field, v, lo, hi) in [
-                ("lanes", t.lanes, 1, 1024),
-                ("latency", t.latency, 0, 1024),
-                ("ii", t.ii, 1, 64),
-                ("fifo", t.fifo, 1, 65536),
-            ] {
+            let values = [t.lanes, t.latency, t.ii, t.fifo];
+            for ((field, lo, hi), v) in TIMING_RANGES.into_iter().zip(values) {
                 if !(lo..=hi).contains(&v) {
                     return err(
                         &format!("{id}.{field}"),
@@ -163,10 +180,15 @@ impl CyclesCfg {
 
 /// Checks a clock frequency (`cycles.clock_mhz`, `--clock-mhz`).
 pub fn check_clock(mhz: f64) -> Result<(), String> {
-    if mhz.is_finite() && mhz > 0.0 && mhz <= 10_000.0 {
+    if mhz.is_finite() && CLOCK_MHZ.contains(&mhz) {
         Ok(())
     } else {
-        Err(format!("must be in (0, 10000] MHz, got {mhz}"))
+        Err(format!(
+            "must be in [{}, {}] MHz (1 kHz to 10 GHz), got {}",
+            CLOCK_MHZ.start(),
+            CLOCK_MHZ.end(),
+            crate::files::num(mhz)
+        ))
     }
 }
 

@@ -5,6 +5,15 @@ use super::set;
 use crate::fixed::QFormat;
 use serde::{Deserialize, Serialize};
 
+/// `dither.frac_bits`: the bits the dither removes.
+pub const FRAC_BITS: std::ops::RangeInclusive<u32> = 1..=8;
+/// Integer bits of the Floyd-Steinberg error format `dither.error`.
+pub const ERROR_INT_BITS: std::ops::RangeInclusive<u32> = 1..=4;
+/// Most fraction bits of `dither.error` (the least is `frac_bits`).
+pub const MAX_ERROR_FRAC_BITS: u32 = 24;
+/// `dither.blue_noise_size`: the sides of the blue-noise mask.
+pub const BLUE_NOISE_SIZES: [u32; 4] = [8, 16, 32, 64];
+
 /// Dither kinds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -104,14 +113,42 @@ impl RawDither {
 
 impl DitherCfg {
     /// Checks the section against the frame and DAC widths: `(field, message)` on failure.
+    /// The ranges of `frac_bits`, `error` and `blue_noise_size` hold whatever the kind (a
+    /// field of a file is never left unchecked); their fit to the DAC and the accumulator
+    /// only when a dither is planned.
     pub fn validate(&self, acc_int_bits: u32, dac_bits: u32) -> Result<(), (String, String)> {
         let err = |f: &str, m: String| Err((format!("dither.{f}"), m));
+        let f = self.frac_bits;
+        if !FRAC_BITS.contains(&f) {
+            return err(
+                "frac_bits",
+                format!(
+                    "must be in {}..={}, got {f}",
+                    FRAC_BITS.start(),
+                    FRAC_BITS.end()
+                ),
+            );
+        }
+        let e = &self.error;
+        let (ei, ef) = (ERROR_INT_BITS, MAX_ERROR_FRAC_BITS);
+        if !e.signed || !ei.contains(&e.int_bits) || e.frac_bits < f || e.frac_bits > ef {
+            return err(
+                "error",
+                format!(
+                    "must be signed Qi.fe with i in {}..={} and fe in {f}..={ef} (at least frac_bits fraction bits), got {e}",
+                    ei.start(),
+                    ei.end()
+                ),
+            );
+        }
+        if !BLUE_NOISE_SIZES.contains(&self.blue_noise_size) {
+            return err(
+                "blue_noise_size",
+                format!("must be 8, 16, 32 or 64, got {}", self.blue_noise_size),
+            );
+        }
         if self.kind == DitherKind::None {
             return Ok(());
-        }
-        let f = self.frac_bits;
-        if !(1..=8).contains(&f) {
-            return err("frac_bits", format!("must be in 1..=8, got {f}"));
         }
         match self.placement {
             Placement::AfterLut if dac_bits + f > 24 => {
@@ -132,21 +169,6 @@ impl DitherCfg {
                 );
             }
             _ => {}
-        }
-        let e = &self.error;
-        if !e.signed || !(1..=4).contains(&e.int_bits) || e.frac_bits < f || e.frac_bits > 24 {
-            return err(
-                "error",
-                format!(
-                    "must be signed Qi.fe with i in 1..=4 and fe in {f}..=24 (at least frac_bits fraction bits), got {e}"
-                ),
-            );
-        }
-        if !matches!(self.blue_noise_size, 8 | 16 | 32 | 64) {
-            return err(
-                "blue_noise_size",
-                format!("must be 8, 16, 32 or 64, got {}", self.blue_noise_size),
-            );
         }
         if self.temporal && self.kind == DitherKind::FloydSteinberg {
             return err(

@@ -7,6 +7,16 @@ use serde::{Deserialize, Serialize};
 /// Largest configurable mask half-size M (pixels): a `(2M+1)`-tap line.
 pub const MAX_HALF_SIZE_LIMIT: u32 = 64;
 
+/// `dof.coef_bits`, `dof.alpha_bits`, `dof.guard_bits`, `dof.line_bits`, `dof.acc_bits`: the
+/// ranges of the word widths.
+pub const DOF_BITS: [(&str, u32, u32); 5] = [
+    ("coef_bits", 4, 20),
+    ("alpha_bits", 4, 24),
+    ("guard_bits", 0, 16),
+    ("line_bits", 8, 64),
+    ("acc_bits", 8, 96),
+];
+
 /// The `[dof]` section: the layered depth-of-field datapath (used only with a thin-lens camera).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DofCfg {
@@ -42,42 +52,30 @@ impl DofCfg {
                 "p",
                 format!(
                     "must be in (0, 1) (the layer difference-degree threshold), got {}",
-                    p.p
+                    crate::files::num(p.p)
                 ),
             );
         }
         if !(p.k.is_finite() && p.k > 0.0 && p.k < 1.0) {
             return err(
                 "k",
-                format!("must be in (0, 1) (mask edge/centre ratio), got {}", p.k),
+                format!(
+                    "must be in (0, 1) (mask edge/centre ratio), got {}",
+                    crate::files::num(p.k)
+                ),
             );
         }
-        if !(4..=20).contains(&p.coef_bits) {
-            return err(
-                "coef_bits",
-                format!("must be in 4..=20, got {}", p.coef_bits),
-            );
-        }
-        if !(4..=24).contains(&p.alpha_bits) {
-            return err(
-                "alpha_bits",
-                format!("must be in 4..=24, got {}", p.alpha_bits),
-            );
-        }
-        if p.guard_bits > 16 {
-            return err(
-                "guard_bits",
-                format!("must be in 0..=16, got {}", p.guard_bits),
-            );
-        }
-        if !(8..=64).contains(&p.line_bits) {
-            return err(
-                "line_bits",
-                format!("must be in 8..=64, got {}", p.line_bits),
-            );
-        }
-        if !(8..=96).contains(&p.acc_bits) {
-            return err("acc_bits", format!("must be in 8..=96, got {}", p.acc_bits));
+        let widths = [
+            p.coef_bits,
+            p.alpha_bits,
+            p.guard_bits,
+            p.line_bits,
+            p.acc_bits,
+        ];
+        for ((field, lo, hi), v) in DOF_BITS.into_iter().zip(widths) {
+            if !(lo..=hi).contains(&v) {
+                return err(field, format!("must be in {lo}..={hi}, got {v}"));
+            }
         }
         if !(1..=MAX_HALF_SIZE_LIMIT).contains(&p.max_half_size) {
             return err(

@@ -4,6 +4,11 @@ use super::set;
 use crate::fixed::Quant;
 use serde::{Deserialize, Serialize};
 
+/// `gamma.dac_bits`: the DAC width.
+pub const DAC_BITS: std::ops::RangeInclusive<u32> = 1..=16;
+/// Largest `gamma.gamma` (the lower bound is exclusive 0).
+pub const MAX_GAMMA: f64 = 5.0;
+
 /// Gamma-correction LUT.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct GammaCfg {
@@ -43,18 +48,25 @@ impl GammaCfg {
     /// Checks the ranges; returns the failing field and a message.
     pub fn validate(&self) -> Result<(), (String, String)> {
         let d = self.dac_bits;
-        if !(1..=16).contains(&d) {
+        if !DAC_BITS.contains(&d) {
             return Err((
                 "gamma.dac_bits".into(),
-                format!("must be in 1..=16, got {d}"),
+                format!(
+                    "must be in {}..={}, got {d}",
+                    DAC_BITS.start(),
+                    DAC_BITS.end()
+                ),
             ));
         }
         if let Some(g) = self.gamma
-            && !(g.is_finite() && g > 0.0 && g <= 5.0)
+            && !(g.is_finite() && g > 0.0 && g <= MAX_GAMMA)
         {
             return Err((
                 "gamma.gamma".into(),
-                format!("must be a finite number in (0, 5], got {g}"),
+                format!(
+                    "must be a finite number in (0, {MAX_GAMMA}], got {}",
+                    crate::files::num(g)
+                ),
             ));
         }
         Ok(())

@@ -18,20 +18,26 @@ mod input;
 mod overlay;
 mod presets;
 mod raster;
+mod schema;
 mod visibility;
 
-pub use accumulate::{AccumulateCfg, FilterKind};
+pub use accumulate::{AccumulateCfg, FilterKind, GAUSSIAN_SIGMA, MAX_WEIGHT_BITS};
 pub use coding::{
     ACC_FRAC_BITS, CodingCfg, CodingKind, MAX_LOG_BITS, MIN_LOG_BITS, TABLE_ADDR_BITS,
     TABLE_FRAC_BITS,
 };
-pub use cycles::{CyclesCfg, StageTiming, TIMED, check_clock};
-pub use dither::{DitherCfg, DitherKind, Placement};
-pub use dof::{DofCfg, MAX_HALF_SIZE_LIMIT};
-pub use gamma::GammaCfg;
+pub use cycles::{
+    CLOCK_MHZ, CyclesCfg, FRAME_PORT_BITS, StageTiming, TILE, TIMED, TIMING_RANGES, check_clock,
+};
+pub use dither::FRAC_BITS as DITHER_FRAC_BITS;
+pub use dither::{
+    BLUE_NOISE_SIZES, DitherCfg, DitherKind, ERROR_INT_BITS, MAX_ERROR_FRAC_BITS, Placement,
+};
+pub use dof::{DOF_BITS, DofCfg, MAX_HALF_SIZE_LIMIT};
+pub use gamma::{DAC_BITS, GammaCfg, MAX_GAMMA};
 pub use input::InputCfg;
 pub use presets::PRESETS;
-pub use raster::{MAX_GUARD_BAND, RasterCfg};
+pub use raster::{INTERP_GUARD_BITS, MAX_GUARD_BAND, RasterCfg};
 pub use visibility::VisibilityCfg;
 
 use crate::error::FileError;
@@ -41,6 +47,9 @@ use serde::Serialize;
 
 /// Largest gamma-LUT address width (the accumulator width): a 2^20-entry ROM.
 pub const MAX_LUT_ADDRESS_BITS: u32 = 20;
+
+/// Most sub-pixel bits of `input.coord` (the least is `log2(samples) + 1`).
+pub const MAX_SUBPIXEL_BITS: u32 = 12;
 
 /// The whole hardware configuration.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -116,6 +125,13 @@ impl HwConfig {
         Ok(hw)
     }
 
+    /// What a hardware field expects, by dotted path (`accumulate.weight_bits` -> `an
+    /// integer in 2 log2(raster.samples)..=16`): the type and range that messages name.
+    /// `None` for a path that is not a field.
+    pub fn field_hint(path: &str) -> Option<String> {
+        schema::hint(path)
+    }
+
     /// A section as JSON, by its name in the file (`"accumulate"`, `"dof"`, ...): the key
     /// material of the stages that read it.
     pub fn section(&self, name: &str) -> serde_json::Value {
@@ -158,19 +174,24 @@ impl HwConfig {
                 ),
             );
         }
-        if c.frac_bits > 12 {
+        if c.frac_bits > MAX_SUBPIXEL_BITS {
             return err(
                 "input.coord",
                 format!(
-                    "sub-pixel bits must be in {need_sub}..=12, got {}",
+                    "sub-pixel bits must be in {need_sub}..={MAX_SUBPIXEL_BITS}, got {}",
                     c.frac_bits
                 ),
             );
         }
-        if self.raster.interp_guard_bits > 24 {
+        let g = self.raster.interp_guard_bits;
+        if !INTERP_GUARD_BITS.contains(&g) {
             return err(
                 "raster.interp_guard_bits",
-                format!("must be in 0..=24, got {}", self.raster.interp_guard_bits),
+                format!(
+                    "must be in {}..={}, got {g}",
+                    INTERP_GUARD_BITS.start(),
+                    INTERP_GUARD_BITS.end()
+                ),
             );
         }
         if self.raster.guard_band > MAX_GUARD_BAND {
@@ -227,19 +248,24 @@ impl HwConfig {
         }
         let wb = self.accumulate.weight_bits;
         let min_wb = 2 * n.trailing_zeros();
-        if wb < min_wb || wb > 16 {
+        if wb < min_wb || wb > MAX_WEIGHT_BITS {
             return err(
                 "accumulate.weight_bits",
                 format!(
-                    "must be in {min_wb}..=16 for a {n}x{n} grid (each sample's share 2^w/n^2 must be an integer), got {wb}"
+                    "must be in {min_wb}..={MAX_WEIGHT_BITS} for a {n}x{n} grid (each sample's share 2^w/n^2 must be an integer), got {wb}"
                 ),
             );
         }
         let s = self.accumulate.gaussian_sigma;
-        if !(s.is_finite() && (0.1..=2.0).contains(&s)) {
+        if !(s.is_finite() && GAUSSIAN_SIGMA.contains(&s)) {
             return err(
                 "accumulate.gaussian_sigma",
-                format!("must be a finite number in 0.1..=2.0 pixels, got {s}"),
+                format!(
+                    "must be a finite number in {:?}..={:?} pixels, got {}",
+                    GAUSSIAN_SIGMA.start(),
+                    GAUSSIAN_SIGMA.end(),
+                    crate::files::num(s)
+                ),
             );
         }
         self.gamma.validate()?;

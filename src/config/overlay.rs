@@ -33,7 +33,7 @@ struct RawHw {
 
 /// Parses a hardware file onto its preset (not yet validated).
 pub(super) fn apply_file(file: &TomlFile) -> Result<HwConfig, FileError> {
-    let raw: RawHw = file.parse()?;
+    let raw: RawHw = file.parse_with(&super::schema::hint)?;
     let base = raw.preset.as_deref().unwrap_or(PRESETS[0]);
     let mut hw = HwConfig::preset(base).ok_or_else(|| {
         file.error(

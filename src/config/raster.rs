@@ -5,8 +5,12 @@ use super::set;
 use crate::fixed::Quant;
 use serde::{Deserialize, Serialize};
 
-/// Largest guard band beyond the screen edge, in pixels.
-pub const MAX_GUARD_BAND: u32 = 4096;
+/// Largest guard band beyond the screen edge, in pixels (the scene bounds line widths and
+/// light-point sizes with it).
+pub use crate::scene::MAX_GUARD_BAND;
+
+/// `raster.interp_guard_bits`: extra fraction bits of the interpolators.
+pub const INTERP_GUARD_BITS: std::ops::RangeInclusive<u32> = 0..=24;
 
 /// Setup and raster.
 #[derive(Clone, Debug, PartialEq, Serialize)]

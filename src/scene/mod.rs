@@ -30,7 +30,7 @@ use serde::Serialize;
 
 pub use project::{depth_from_screen_z, front_end, screen_z};
 pub use shade::shade_vertex;
-pub use tessellate::{Mesh, tessellate};
+pub use tessellate::{Mesh, primitive_count, tessellate};
 
 /// Largest accepted image width and height, in pixels (`image.width`, `image.height` are in
 /// `1..=MAX_RESOLUTION`).
@@ -41,6 +41,29 @@ pub const MIN_TESSELLATION: u32 = 3;
 
 /// Largest accepted tessellation level of a canonical object.
 pub const MAX_TESSELLATION: u32 = 1024;
+
+/// Largest magnitude of a world coordinate and largest length (radius, clipping plane, focal
+/// length), in scene units; screen-space x and y (pixels) have the same bound. Beyond it the
+/// front end's products of coordinates lose the precision it needs.
+pub const MAX_COORD: f64 = 1e9;
+
+/// Smallest positive length in scene units (radius, clipping plane, focal length, lens radius,
+/// circle of confusion): below it `1 / near` and the projection's scale leave f64's range.
+pub const MIN_LENGTH: f64 = 1e-9;
+
+/// Largest intensity (light, vertex, line, light point), specular coefficient and emission;
+/// 1 = full white.
+pub const MAX_INTENSITY: f64 = 1e6;
+
+/// Largest guard band of the hardware beyond each screen edge, in pixels (`raster.guard_band`
+/// is in `0..=MAX_GUARD_BAND`). It bounds the line widths and light-point sizes of a scene:
+/// at most `2 (screen diagonal + 2 MAX_GUARD_BAND)` pixels.
+pub const MAX_GUARD_BAND: u32 = 4096;
+
+/// Most primitives a scene may put into the front end (tessellated triangles, raw triangles
+/// (a quad counts 2), lines and light points): four spheres at the largest tessellation. It
+/// bounds the host's and the pipeline's per-primitive memory (a few hundred bytes each).
+pub const MAX_PRIMITIVES: u64 = 1 << 22;
 
 /// Embedded scenes by name: `(name, TOML text)`. [`Scene::embedded`] looks names up here.
 pub const EMBEDDED: &[(&str, &str)] = &[
@@ -81,15 +104,15 @@ pub struct ImageSpec {
 /// The display model (`[display]`, every field optional).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Display {
-    /// Contrast `K = B_max / B_min`, > 1 (default 100).
+    /// Contrast `K = B_max / B_min`, in `[2, 1e9]` (default 100).
     pub contrast: f64,
     /// Display gamma, in `(1, 5]` (default 2.4).
     pub gamma: f64,
-    /// Weber–Fechner fraction δ, in `(0, 1)` (default 0.02).
+    /// Weber–Fechner fraction δ, in `[0.001, 0.5]` (default 0.02).
     pub weber: f64,
-    /// Peak luminance in cd/m², > 0 (default 100).
+    /// Peak luminance in cd/m², in `[0.01, 1e6]` (default 100).
     pub b_max: f64,
-    /// Refresh rate in Hz, > 0 (default 60).
+    /// Refresh rate in Hz, in `[1, 1000]` (default 60).
     pub refresh_hz: f64,
 }
 
@@ -121,17 +144,20 @@ pub enum Lens {
     Pinhole,
     /// Thin lens (docs/reference.md §2). All lengths in scene units.
     ThinLens {
-        /// Focal length F, > 0.
+        /// Focal length F, in `[MIN_LENGTH, MAX_COORD]`.
         focal_length: f64,
-        /// Lens (aperture) radius R, > 0. In the file either `lens_radius` or `f_number`
+        /// Lens (aperture) radius R, in `[MIN_LENGTH, near]`: no wider than the distance to
+        /// the near plane. In the file either `lens_radius` or `f_number` (in `[0.001, 1e6]`)
         /// (then `lens_radius = focal_length / (2 f_number)`).
         lens_radius: f64,
-        /// Distance of the plane in focus, > `focal_length`.
+        /// Distance of the plane in focus, > `focal_length`, at most `MAX_COORD`.
         focus_distance: f64,
-        /// Half-width of the in-focus band around `focus_distance`, >= 0 (default 0).
+        /// Half-width of the in-focus band around `focus_distance`, in `[0, MAX_COORD]`
+        /// (default 0).
         deep: f64,
-        /// Permissible circle of confusion, > 0 (default `0.035 * focal_length / 50`: the
-        /// 35 mm film standard of 0.035 mm at F = 50 mm, scaled with the focal length).
+        /// Permissible circle of confusion, in `[MIN_LENGTH, MAX_COORD]` (default
+        /// `0.035 * focal_length / 50`: the 35 mm film standard of 0.035 mm at F = 50 mm,
+        /// scaled with the focal length).
         coc: f64,
     },
 }
@@ -152,11 +178,11 @@ pub struct Camera {
     pub look_at: [f64; 3],
     /// Upward direction (default `[0, 1, 0]`); not parallel to the view direction.
     pub up: [f64; 3],
-    /// Vertical field of view in degrees, in `(0, 180)` (default 45).
+    /// Vertical field of view in degrees, in `[0.001, 180)` (default 45).
     pub fov_y_deg: f64,
-    /// Near clipping distance along the view axis, > 0.
+    /// Near clipping distance along the view axis, in `[MIN_LENGTH, MAX_COORD]`.
     pub near: f64,
-    /// Far clipping distance along the view axis, > `near`.
+    /// Far clipping distance along the view axis, at least `1.001 near`, at most `MAX_COORD`.
     pub far: f64,
     /// The lens.
     pub lens: Lens,
@@ -181,7 +207,7 @@ impl Default for Shading {
 pub struct Light {
     /// Direction towards the light, world space, normalised on load.
     pub direction: [f64; 3],
-    /// Intensity I_l, >= 0 (default 1).
+    /// Intensity I_l, in `[0, MAX_INTENSITY]` (default 1).
     pub intensity: f64,
 }
 
@@ -190,11 +216,11 @@ pub struct Light {
 pub struct Material {
     /// Diffuse reflectance c_r, in `[0, 1]` (default 0.8).
     pub reflectance: f64,
-    /// Specular coefficient, >= 0 (default 0).
+    /// Specular coefficient, in `[0, MAX_INTENSITY]` (default 0).
     pub specular: f64,
-    /// Blinn-Phong exponent p, > 0 (default 20).
+    /// Blinn-Phong exponent p, in `(0, 1e6]` (default 20).
     pub shininess: f64,
-    /// Intensity added unshaded, >= 0 (default 0).
+    /// Intensity added unshaded, in `[0, MAX_INTENSITY]` (default 0).
     pub emissive: f64,
 }
 
@@ -230,7 +256,7 @@ pub enum Object {
     Sphere {
         /// Centre.
         center: [f64; 3],
-        /// Radius, > 0.
+        /// Radius, in `[MIN_LENGTH, MAX_COORD]`.
         radius: f64,
         /// Segments around, `3..=1024` (default 32).
         tessellation: u32,
@@ -246,7 +272,7 @@ pub enum Object {
         axis: [f64; 3],
         /// Distance from the centre to the tube's centre line, > `minor_radius`.
         major_radius: f64,
-        /// Tube radius, > 0.
+        /// Tube radius, in `[MIN_LENGTH, MAX_COORD]`.
         minor_radius: f64,
         /// Segments around the axis, `3..=1024` (default 32).
         tessellation: u32,
@@ -259,7 +285,7 @@ pub enum Object {
         base: [f64; 3],
         /// From the base centre to the apex; its length is the height (non-zero).
         axis: [f64; 3],
-        /// Base radius, > 0.
+        /// Base radius, in `[MIN_LENGTH, MAX_COORD]`.
         radius: f64,
         /// Segments around, `3..=1024` (default 32).
         tessellation: u32,
@@ -275,7 +301,7 @@ pub enum Object {
         base: [f64; 3],
         /// From the bottom centre to the top centre; its length is the height (non-zero).
         axis: [f64; 3],
-        /// Radius, > 0.
+        /// Radius, in `[MIN_LENGTH, MAX_COORD]`.
         radius: f64,
         /// Segments around, `3..=1024` (default 32).
         tessellation: u32,
@@ -291,8 +317,8 @@ pub enum Object {
         space: Space,
         /// The vertices.
         vertices: [[f64; 3]; 3],
-        /// Per-vertex intensity (>= 0), unshaded; required in screen space. `None`: shaded
-        /// with `material` and the face normal turned towards the eye.
+        /// Per-vertex intensity (in `[0, MAX_INTENSITY]`), unshaded; required in screen space.
+        /// `None`: shaded with `material` and the face normal turned towards the eye.
         intensity: Option<[f64; 3]>,
         /// Surface (used only when `intensity` is `None`).
         material: Material,
@@ -303,7 +329,7 @@ pub enum Object {
         space: Space,
         /// The vertices, in order around the quad.
         vertices: [[f64; 3]; 4],
-        /// Per-vertex intensity (>= 0); required in screen space.
+        /// Per-vertex intensity (in `[0, MAX_INTENSITY]`); required in screen space.
         intensity: Option<[f64; 4]>,
         /// Surface (used only when `intensity` is `None`); each half is shaded with its own
         /// face normal.
@@ -317,9 +343,9 @@ pub enum Object {
         from: [f64; 3],
         /// Second end point.
         to: [f64; 3],
-        /// Intensity, >= 0, unshaded.
+        /// Intensity, in `[0, MAX_INTENSITY]`, unshaded.
         intensity: f64,
-        /// Width in pixels, > 0 (default 1).
+        /// Width in pixels, in `(0, 2 (diagonal + 2 MAX_GUARD_BAND)]` (default 1).
         width: f64,
     },
     /// A light point (a star, a runway light): a point of constant intensity.
@@ -328,9 +354,9 @@ pub enum Object {
         space: Space,
         /// Position.
         position: [f64; 3],
-        /// Intensity, >= 0, unshaded.
+        /// Intensity, in `[0, MAX_INTENSITY]`, unshaded.
         intensity: f64,
-        /// Size in pixels, > 0 (default 1).
+        /// Size in pixels, in `(0, 2 (diagonal + 2 MAX_GUARD_BAND)]` (default 1).
         size: f64,
     },
 }
@@ -361,6 +387,13 @@ impl Scene {
     /// allowed range.
     pub fn from_toml(file: &TomlFile) -> Result<Scene, FileError> {
         parse::scene_from_toml(file)
+    }
+
+    /// What a scene field expects, by dotted path (`object[2].tessellation` -> `an integer
+    /// in 3..=1024`): the type and the allowed range that messages name. `None` for a path
+    /// that is not a field.
+    pub fn field_hint(path: &str) -> Option<String> {
+        parse::hint(path)
     }
 
     /// Reads, parses and validates a scene file from disk.

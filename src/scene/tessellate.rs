@@ -201,6 +201,34 @@ pub fn tessellate(object: &Object) -> Option<Mesh> {
     Some(m)
 }
 
+/// The triangles an object puts into the front end before culling and clipping, without
+/// building them: [`tessellate`]'s count for the canonical objects, 1 for a raw triangle, 2
+/// for a quad and 1 for a line or a light point (one primitive each).
+pub fn primitive_count(object: &Object) -> u64 {
+    let cap = |capped: bool, discs: u64, n: u32| if capped { discs * u64::from(n) } else { 0 };
+    match *object {
+        Object::Sphere { tessellation, .. } => {
+            let n = u64::from(tessellation);
+            2 * n * (u64::from((tessellation / 2).max(2)) - 1)
+        }
+        Object::Torus { tessellation, .. } => {
+            2 * u64::from(tessellation) * u64::from((tessellation / 2).max(3))
+        }
+        Object::Cone {
+            tessellation,
+            capped,
+            ..
+        } => u64::from(tessellation) + cap(capped, 1, tessellation),
+        Object::Cylinder {
+            tessellation,
+            capped,
+            ..
+        } => 2 * u64::from(tessellation) + cap(capped, 2, tessellation),
+        Object::Quad { .. } => 2,
+        Object::Triangle { .. } | Object::Line { .. } | Object::LightPoint { .. } => 1,
+    }
+}
+
 /// A flat disc (cap) of `n` triangles around `centre` facing `normal`.
 fn disc(m: &mut Mesh, centre: V3, normal: V3, radius: f64, n: u32, radial: &dyn Fn(f64) -> V3) {
     let c = m.vertex(centre, normal);

@@ -7,14 +7,23 @@
 //! that does not belong to its kind get their own precise messages.
 
 use super::vec3::{cross, norm, normalize, sub};
-use super::{Camera, Display, ImageSpec, Lens, Light, MAX_RESOLUTION, Scene, Shading};
+use super::{
+    Camera, Display, ImageSpec, Lens, Light, MAX_PRIMITIVES, MAX_RESOLUTION, Object, Scene,
+    Shading, primitive_count, tessellate,
+};
 use crate::error::FileError;
 use crate::files::TomlFile;
 use serde::Deserialize;
 
 mod objects;
+mod schema;
 
 use objects::{RawObject, object};
+pub(crate) use schema::hint;
+use schema::{
+    B_MAX, CONTRAST, COORD, F_NUMBER, FAR_OVER_NEAR, FOV, GAMMA, INTENSITY, LENGTH, LENGTH0,
+    REFRESH, Range, UNIT, Vec3, WEBER, num,
+};
 
 type R<T> = Result<T, FileError>;
 
@@ -43,9 +52,9 @@ struct RawImage {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawCamera {
-    position: [f64; 3],
-    look_at: [f64; 3],
-    up: Option<[f64; 3]>,
+    position: Vec3,
+    look_at: Vec3,
+    up: Option<Vec3>,
     fov_y_deg: Option<f64>,
     near: f64,
     far: f64,
@@ -83,47 +92,8 @@ struct RawShading {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawLight {
-    direction: [f64; 3],
+    direction: Vec3,
     intensity: Option<f64>,
-}
-
-/// An allowed range of a real number.
-#[derive(Clone, Copy)]
-enum Range {
-    Any,
-    Gt(f64),
-    Ge(f64),
-    /// `(lo, hi)`
-    Open(f64, f64),
-    /// `[lo, hi]`
-    Closed(f64, f64),
-    /// `(lo, hi]`
-    LeftOpen(f64, f64),
-}
-
-impl Range {
-    fn contains(self, x: f64) -> bool {
-        x.is_finite()
-            && match self {
-                Range::Any => true,
-                Range::Gt(a) => x > a,
-                Range::Ge(a) => x >= a,
-                Range::Open(a, b) => x > a && x < b,
-                Range::Closed(a, b) => x >= a && x <= b,
-                Range::LeftOpen(a, b) => x > a && x <= b,
-            }
-    }
-
-    fn describe(self) -> String {
-        match self {
-            Range::Any => "a finite number".into(),
-            Range::Gt(a) => format!("a finite number > {a}"),
-            Range::Ge(a) => format!("a finite number >= {a}"),
-            Range::Open(a, b) => format!("a finite number in ({a}, {b})"),
-            Range::Closed(a, b) => format!("a finite number in [{a}, {b}]"),
-            Range::LeftOpen(a, b) => format!("a finite number in ({a}, {b}]"),
-        }
-    }
 }
 
 /// Validation context: the file, for locating errors.
@@ -140,7 +110,10 @@ impl Ctx<'_> {
         if range.contains(x) {
             Ok(x)
         } else {
-            Err(self.err(path, format!("must be {}, got {x}", range.describe())))
+            Err(self.err(
+                path,
+                format!("must be {}, got {}", range.describe(), num(x)),
+            ))
         }
     }
 
@@ -151,28 +124,29 @@ impl Ctx<'_> {
         }
     }
 
-    fn vec3(&self, path: &str, v: [f64; 3]) -> R<[f64; 3]> {
-        for (k, c) in v.iter().enumerate() {
-            self.num(&format!("{path}[{k}]"), *c, Range::Any)?;
+    /// A vector of finite coordinates, each in [`COORD`].
+    fn vec3(&self, path: &str, v: Vec3) -> R<[f64; 3]> {
+        for (k, c) in v.0.iter().enumerate() {
+            self.num(&format!("{path}[{k}]"), *c, COORD)?;
         }
-        Ok(v)
+        Ok(v.0)
     }
 
     /// A finite, non-zero direction, normalised.
-    fn direction(&self, path: &str, v: [f64; 3]) -> R<[f64; 3]> {
-        self.vec3(path, v)?;
-        let n = norm(v);
-        if n > 0.0 && n.is_finite() {
-            Ok(normalize(v))
-        } else {
-            Err(self.err(path, format!("must be a non-zero vector, got {v:?}")))
-        }
+    fn direction(&self, path: &str, v: Vec3) -> R<[f64; 3]> {
+        let v = self.nonzero(path, v)?;
+        Ok(normalize(v))
     }
 
     /// A finite, non-zero vector kept at its length (cone and cylinder axes).
-    fn nonzero(&self, path: &str, v: [f64; 3]) -> R<[f64; 3]> {
-        self.direction(path, v)?;
-        Ok(v)
+    fn nonzero(&self, path: &str, v: Vec3) -> R<[f64; 3]> {
+        let v = self.vec3(path, v)?;
+        let n = norm(v);
+        if n > 0.0 && n.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be a non-zero vector, got {v:?}")))
+        }
     }
 
     fn int(&self, path: &str, x: i64, lo: u32, hi: u32) -> R<u32> {
@@ -183,13 +157,18 @@ impl Ctx<'_> {
         }
     }
 
+    /// A required field: missing, the error names `path.field` (located at its table).
     fn required<T>(&self, path: &str, field: &str, x: Option<T>, what: &str) -> R<T> {
-        x.ok_or_else(|| self.err(path, format!("missing field `{field}` ({what})")))
+        x.ok_or_else(|| {
+            let mut e = self.err(path, format!("missing field `{field}` ({what})"));
+            e.field = format!("{path}.{field}");
+            e
+        })
     }
 }
 
 pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
-    let raw: RawScene = file.parse()?;
+    let raw: RawScene = file.parse_with(&hint)?;
     let c = Ctx { file };
     let name = raw.name.unwrap_or_else(|| stem(&file.name));
     let image = image(&c, &raw.image)?;
@@ -197,7 +176,7 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
     let display = display(&c, raw.display.as_ref())?;
     let shading = match raw.shading {
         Some(s) => Shading {
-            ambient: c.opt("shading.ambient", s.ambient, 0.1, Range::Closed(0.0, 1.0))?,
+            ambient: c.opt("shading.ambient", s.ambient, 0.1, UNIT)?,
         },
         None => Shading::default(),
     };
@@ -212,7 +191,7 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
                     &format!("light[{k}].intensity"),
                     l.intensity,
                     1.0,
-                    Range::Ge(0.0),
+                    INTENSITY,
                 )?,
             })
         })
@@ -221,8 +200,9 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         .object
         .iter()
         .enumerate()
-        .map(|(k, o)| object(&c, &format!("object[{k}]"), o))
+        .map(|(k, o)| object(&c, &format!("object[{k}]"), o, (image.width, image.height)))
         .collect::<R<Vec<_>>>()?;
+    primitives(&c, &objects)?;
     Ok(Scene {
         name,
         image,
@@ -232,6 +212,36 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         lights,
         objects,
     })
+}
+
+/// The scene's primitives stay within [`MAX_PRIMITIVES`]: the error names the object that
+/// crosses the limit (its tessellation, for a canonical object).
+fn primitives(c: &Ctx, objects: &[Object]) -> R<()> {
+    let mut total = 0u64;
+    for (k, o) in objects.iter().enumerate() {
+        let n = primitive_count(o);
+        total += n;
+        if total > MAX_PRIMITIVES {
+            let tessellated = tessellate(o).is_some();
+            let field = if tessellated {
+                format!("object[{k}].tessellation")
+            } else {
+                format!("object[{k}]")
+            };
+            let fix = if tessellated {
+                "lower the tessellation of this object or of the ones before it"
+            } else {
+                "draw fewer objects"
+            };
+            return Err(c.err(
+                &field,
+                format!(
+                    "the objects up to this one make {total} primitives (this one {n}), more than the {MAX_PRIMITIVES} a scene may have; {fix}"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `dir/name.toml` -> `name`.
@@ -244,12 +254,7 @@ fn image(c: &Ctx, r: &RawImage) -> R<ImageSpec> {
     Ok(ImageSpec {
         width: c.int("image.width", r.width, 1, MAX_RESOLUTION)?,
         height: c.int("image.height", r.height, 1, MAX_RESOLUTION)?,
-        background: c.opt(
-            "image.background",
-            r.background,
-            0.0,
-            Range::Closed(0.0, 1.0),
-        )?,
+        background: c.opt("image.background", r.background, 0.0, UNIT)?,
     })
 }
 
@@ -260,7 +265,7 @@ fn camera(c: &Ctx, r: &RawCamera) -> R<Camera> {
     if norm(view) == 0.0 {
         return Err(c.err("camera.look_at", "must differ from camera.position"));
     }
-    let up = c.direction("camera.up", r.up.unwrap_or([0.0, 1.0, 0.0]))?;
+    let up = c.direction("camera.up", r.up.unwrap_or(Vec3([0.0, 1.0, 0.0])))?;
     // sin of the angle between up and the view direction.
     if norm(cross(normalize(view), up)) < 1e-6 {
         return Err(c.err(
@@ -268,23 +273,25 @@ fn camera(c: &Ctx, r: &RawCamera) -> R<Camera> {
             format!("must not be parallel to the view direction (look_at - position = {view:?})"),
         ));
     }
-    let fov_y_deg = c.opt(
-        "camera.fov_y_deg",
-        r.fov_y_deg,
-        45.0,
-        Range::Open(0.0, 180.0),
-    )?;
-    let near = c.num("camera.near", r.near, Range::Gt(0.0))?;
-    let far = c.num("camera.far", r.far, Range::Any)?;
-    if far <= near {
+    let fov_y_deg = c.opt("camera.fov_y_deg", r.fov_y_deg, 45.0, FOV)?;
+    let near = c.num("camera.near", r.near, LENGTH)?;
+    let far = c.num("camera.far", r.far, LENGTH)?;
+    // A view volume at least 0.1 % deep: the background's screen depth 1 / (1 - near / far)
+    // (the depth of field's infinity) stays <= 1001.
+    if far < FAR_OVER_NEAR * near {
         return Err(c.err(
             "camera.far",
-            format!("must be a finite number > camera.near = {near}, got {far}"),
+            format!(
+                "must be a finite number > camera.near = {}, at least {FAR_OVER_NEAR} camera.near = {} (a view volume at least 0.1 % deep), got {}",
+                num(near),
+                num(FAR_OVER_NEAR * near),
+                num(far)
+            ),
         ));
     }
     let lens = match &r.lens {
         None => Lens::Pinhole,
-        Some(l) => lens(c, l)?,
+        Some(l) => lens(c, l, near)?,
     };
     Ok(Camera {
         position,
@@ -297,7 +304,7 @@ fn camera(c: &Ctx, r: &RawCamera) -> R<Camera> {
     })
 }
 
-fn lens(c: &Ctx, r: &RawLens) -> R<Lens> {
+fn lens(c: &Ctx, r: &RawLens, near: f64) -> R<Lens> {
     let kind = c.required(
         "camera.lens",
         "kind",
@@ -322,56 +329,7 @@ fn lens(c: &Ctx, r: &RawLens) -> R<Lens> {
             }
             Ok(Lens::Pinhole)
         }
-        "thin_lens" => {
-            let what = "a finite number > 0, scene units";
-            let f = c.required("camera.lens", "focal_length", r.focal_length, what)?;
-            let focal_length = c.num("camera.lens.focal_length", f, Range::Gt(0.0))?;
-            let lens_radius = match (r.f_number, r.lens_radius) {
-                (Some(_), Some(_)) => {
-                    return Err(c.err(
-                        "camera.lens.lens_radius",
-                        "give either f_number or lens_radius, not both (lens_radius = focal_length / (2 f_number))",
-                    ));
-                }
-                (Some(n), None) => {
-                    focal_length / (2.0 * c.num("camera.lens.f_number", n, Range::Gt(0.0))?)
-                }
-                (None, Some(rad)) => c.num("camera.lens.lens_radius", rad, Range::Gt(0.0))?,
-                (None, None) => {
-                    return Err(c.err(
-                        "camera.lens",
-                        "missing field `f_number` or `lens_radius` (one of them, a finite number > 0)",
-                    ));
-                }
-            };
-            let d = c.required(
-                "camera.lens",
-                "focus_distance",
-                r.focus_distance,
-                "a finite number > focal_length",
-            )?;
-            let focus_distance = c.num("camera.lens.focus_distance", d, Range::Any)?;
-            if focus_distance <= focal_length {
-                return Err(c.err(
-                    "camera.lens.focus_distance",
-                    format!("must be a finite number > focal_length = {focal_length}, got {focus_distance}"),
-                ));
-            }
-            let deep = c.opt("camera.lens.deep", r.deep, 0.0, Range::Ge(0.0))?;
-            let coc = c.opt(
-                "camera.lens.coc",
-                r.coc,
-                Lens::default_coc(focal_length),
-                Range::Gt(0.0),
-            )?;
-            Ok(Lens::ThinLens {
-                focal_length,
-                lens_radius,
-                focus_distance,
-                deep,
-                coc,
-            })
-        }
+        "thin_lens" => thin_lens(c, r, near),
         other => Err(c.err(
             "camera.lens.kind",
             format!("unknown lens kind \"{other}\"; allowed: \"pinhole\", \"thin_lens\""),
@@ -379,19 +337,114 @@ fn lens(c: &Ctx, r: &RawLens) -> R<Lens> {
     }
 }
 
+/// A thin lens: every length in [`LENGTH`], the aperture no wider than the distance to the
+/// near plane (`lens_radius <= near`: a wider one blurs a near object over more than the
+/// whole image, and a radius without bound overflows the blur slope to infinity, which turned
+/// depth of field off), the plane in focus beyond the focal length.
+fn thin_lens(c: &Ctx, r: &RawLens, near: f64) -> R<Lens> {
+    let what = LENGTH.describe();
+    let f = c.required("camera.lens", "focal_length", r.focal_length, &what)?;
+    let focal_length = c.num("camera.lens.focal_length", f, LENGTH)?;
+    let wide = |field: &str, radius: f64, fix: String| {
+        c.err(
+            field,
+            format!(
+                "gives lens_radius = {} > camera.near = {}: the aperture must not be wider than the distance to the near plane; {fix}",
+                num(radius),
+                num(near)
+            ),
+        )
+    };
+    let lens_radius = match (r.f_number, r.lens_radius) {
+        (Some(_), Some(_)) => {
+            return Err(c.err(
+                "camera.lens.lens_radius",
+                "give either f_number or lens_radius, not both (lens_radius = focal_length / (2 f_number))",
+            ));
+        }
+        (Some(n), None) => {
+            let n = c.num("camera.lens.f_number", n, F_NUMBER)?;
+            let radius = focal_length / (2.0 * n);
+            if radius > near {
+                let min = focal_length / (2.0 * near);
+                return Err(wide(
+                    "camera.lens.f_number",
+                    radius,
+                    format!(
+                        "f_number must be >= focal_length / (2 camera.near) = {}",
+                        num(min)
+                    ),
+                ));
+            }
+            radius
+        }
+        (None, Some(rad)) => {
+            let rad = c.num("camera.lens.lens_radius", rad, LENGTH)?;
+            if rad > near {
+                return Err(wide(
+                    "camera.lens.lens_radius",
+                    rad,
+                    format!(
+                        "use a radius in [{}, {}]",
+                        num(crate::scene::MIN_LENGTH),
+                        num(near)
+                    ),
+                ));
+            }
+            rad
+        }
+        (None, None) => {
+            return Err(c.err(
+                "camera.lens",
+                format!(
+                    "missing field `f_number` or `lens_radius` (one of them: f_number {}, or lens_radius {} and <= camera.near)",
+                    F_NUMBER.describe(),
+                    LENGTH.describe()
+                ),
+            ));
+        }
+    };
+    let d = c.required(
+        "camera.lens",
+        "focus_distance",
+        r.focus_distance,
+        &format!("{what}, > focal_length"),
+    )?;
+    let focus_distance = c.num("camera.lens.focus_distance", d, LENGTH)?;
+    if focus_distance <= focal_length {
+        return Err(c.err(
+            "camera.lens.focus_distance",
+            format!(
+                "must be a finite number > focal_length = {}, got {}",
+                num(focal_length),
+                num(focus_distance)
+            ),
+        ));
+    }
+    let deep = c.opt("camera.lens.deep", r.deep, 0.0, LENGTH0)?;
+    let coc = c.opt(
+        "camera.lens.coc",
+        r.coc,
+        Lens::default_coc(focal_length),
+        LENGTH,
+    )?;
+    Ok(Lens::ThinLens {
+        focal_length,
+        lens_radius,
+        focus_distance,
+        deep,
+        coc,
+    })
+}
+
 fn display(c: &Ctx, r: Option<&RawDisplay>) -> R<Display> {
     let d = Display::default();
     let Some(r) = r else { return Ok(d) };
     Ok(Display {
-        contrast: c.opt("display.contrast", r.contrast, d.contrast, Range::Gt(1.0))?,
-        gamma: c.opt("display.gamma", r.gamma, d.gamma, Range::LeftOpen(1.0, 5.0))?,
-        weber: c.opt("display.weber", r.weber, d.weber, Range::Open(0.0, 1.0))?,
-        b_max: c.opt("display.b_max", r.b_max, d.b_max, Range::Gt(0.0))?,
-        refresh_hz: c.opt(
-            "display.refresh_hz",
-            r.refresh_hz,
-            d.refresh_hz,
-            Range::Gt(0.0),
-        )?,
+        contrast: c.opt("display.contrast", r.contrast, d.contrast, CONTRAST)?,
+        gamma: c.opt("display.gamma", r.gamma, d.gamma, GAMMA)?,
+        weber: c.opt("display.weber", r.weber, d.weber, WEBER)?,
+        b_max: c.opt("display.b_max", r.b_max, d.b_max, B_MAX)?,
+        refresh_hz: c.opt("display.refresh_hz", r.refresh_hz, d.refresh_hz, REFRESH)?,
     })
 }

@@ -2,6 +2,7 @@
 //! so an unknown `kind` and a field that does not belong to its kind get precise messages),
 //! their vertices, materials and intensities.
 
+use super::schema::{INTENSITY, LENGTH, SHININESS, UNIT, Vec3, max_width, num};
 use super::{Ctx, R, Range};
 use crate::scene::{MAX_TESSELLATION, MIN_TESSELLATION, Material, Object, Space};
 use serde::Deserialize;
@@ -11,20 +12,20 @@ use serde::Deserialize;
 pub(super) struct RawObject {
     kind: Option<String>,
     space: Option<String>,
-    center: Option<[f64; 3]>,
-    base: Option<[f64; 3]>,
-    axis: Option<[f64; 3]>,
+    center: Option<Vec3>,
+    base: Option<Vec3>,
+    axis: Option<Vec3>,
     radius: Option<f64>,
     major_radius: Option<f64>,
     minor_radius: Option<f64>,
     tessellation: Option<i64>,
     capped: Option<bool>,
-    vertices: Option<Vec<[f64; 3]>>,
+    vertices: Option<Vec<Vec3>>,
     intensity: Option<toml::Value>,
-    from: Option<[f64; 3]>,
-    to: Option<[f64; 3]>,
+    from: Option<Vec3>,
+    to: Option<Vec3>,
     width: Option<f64>,
-    position: Option<[f64; 3]>,
+    position: Option<Vec3>,
     size: Option<f64>,
     reflectance: Option<f64>,
     specular: Option<f64>,
@@ -113,7 +114,9 @@ fn allowed(kind: &str) -> Option<&'static [&'static str]> {
     })
 }
 
-pub(super) fn object(c: &Ctx, p: &str, o: &RawObject) -> R<Object> {
+/// One `[[object]]` of an image of `size = (width, height)` pixels (which bounds line widths
+/// and light-point sizes).
+pub(super) fn object(c: &Ctx, p: &str, o: &RawObject, size: (u32, u32)) -> R<Object> {
     let kind = c.required(p, "kind", o.kind.as_deref(), &format!("one of {KINDS}"))?;
     let Some(fields) = allowed(kind) else {
         return Err(c.err(
@@ -133,6 +136,8 @@ pub(super) fn object(c: &Ctx, p: &str, o: &RawObject) -> R<Object> {
         }
     }
     let path = |f: &str| format!("{p}.{f}");
+    // Line width and light-point size, pixels: a wider one covers nothing more.
+    let wide = Range::LeftOpen(0.0, max_width(size.0, size.1));
     let req = |what: &str| format!("required for kind = \"{kind}\"; {what}");
     let tess = |c: &Ctx| -> R<u32> {
         match o.tessellation {
@@ -141,10 +146,10 @@ pub(super) fn object(c: &Ctx, p: &str, o: &RawObject) -> R<Object> {
         }
     };
     let pos_len = |c: &Ctx, f: &str, x: Option<f64>| -> R<f64> {
-        let x = c.required(p, f, x, &req("a finite number > 0"))?;
-        c.num(&path(f), x, Range::Gt(0.0))
+        let x = c.required(p, f, x, &req(&LENGTH.describe()))?;
+        c.num(&path(f), x, LENGTH)
     };
-    let point = |c: &Ctx, f: &str, x: Option<[f64; 3]>| -> R<[f64; 3]> {
+    let point = |c: &Ctx, f: &str, x: Option<Vec3>| -> R<[f64; 3]> {
         let x = c.required(p, f, x, &req("[x, y, z]"))?;
         c.vec3(&path(f), x)
     };
@@ -172,7 +177,11 @@ pub(super) fn object(c: &Ctx, p: &str, o: &RawObject) -> R<Object> {
             if minor_radius >= major_radius {
                 return Err(c.err(
                     &path("minor_radius"),
-                    format!("must be < major_radius = {major_radius}, got {minor_radius}"),
+                    format!(
+                        "must be < major_radius = {}, got {}",
+                        num(major_radius),
+                        num(minor_radius)
+                    ),
                 ));
             }
             Object::Torus {
@@ -222,16 +231,20 @@ pub(super) fn object(c: &Ctx, p: &str, o: &RawObject) -> R<Object> {
                     format!("must be {what}, got {} vertices", vs.len()),
                 ));
             }
-            for (k, v) in vs.iter().enumerate() {
-                vertex(c, &format!("{p}.vertices[{k}]"), *v, space)?;
-            }
+            let vs = vs
+                .iter()
+                .enumerate()
+                .map(|(k, v)| vertex(c, &format!("{p}.vertices[{k}]"), *v, space))
+                .collect::<R<Vec<_>>>()?;
             let intensity = match &o.intensity {
                 Some(v) => Some(intensity_list(c, &path("intensity"), v, n)?),
                 None if space == Space::Screen => {
-                    return Err(c.err(
+                    let mut e = c.err(
                         p,
-                        format!("missing field `intensity` (required in screen space: an array of {n} numbers >= 0, one per vertex)"),
-                    ));
+                        format!("missing field `intensity` (required in screen space: an array of {n} numbers in [0, {}], one per vertex)", num(crate::scene::MAX_INTENSITY)),
+                    );
+                    e.field = path("intensity");
+                    return Err(e);
                 }
                 None => None,
             };
@@ -268,7 +281,7 @@ pub(super) fn object(c: &Ctx, p: &str, o: &RawObject) -> R<Object> {
                 from: vertex(c, &path("from"), from, space)?,
                 to: vertex(c, &path("to"), to, space)?,
                 intensity: scalar_intensity(c, p, kind, o.intensity.as_ref())?,
-                width: c.opt(&path("width"), o.width, 1.0, Range::Gt(0.0))?,
+                width: pixels(c, &path("width"), o.width, wide)?,
             }
         }
         "light_point" => {
@@ -277,22 +290,40 @@ pub(super) fn object(c: &Ctx, p: &str, o: &RawObject) -> R<Object> {
                 space,
                 position: vertex(c, &path("position"), position, space)?,
                 intensity: scalar_intensity(c, p, kind, o.intensity.as_ref())?,
-                size: c.opt(&path("size"), o.size, 1.0, Range::Gt(0.0))?,
+                size: pixels(c, &path("size"), o.size, wide)?,
             }
         }
         _ => unreachable!("kind checked by allowed()"),
     })
 }
 
-/// A vertex: finite; in screen space z (screen depth) in [0, 1].
-fn vertex(c: &Ctx, path: &str, v: [f64; 3], space: Space) -> R<[f64; 3]> {
-    c.vec3(path, v)?;
+/// A line width or light-point size in pixels (default 1), in `wide`: the bound keeps the
+/// footprint and the raster's loops finite.
+fn pixels(c: &Ctx, path: &str, x: Option<f64>, wide: Range) -> R<f64> {
+    let x = x.unwrap_or(1.0);
+    if wide.contains(x) {
+        return Ok(x);
+    }
+    Err(c.err(
+        path,
+        format!(
+            "must be {} pixels (twice the screen diagonal plus twice the largest guard band, {} pixels, on each side: a wider one covers nothing more), got {}",
+            wide.describe(),
+            crate::scene::MAX_GUARD_BAND,
+            num(x)
+        ),
+    ))
+}
+
+/// A vertex: every coordinate in [`super::schema::COORD`]; in screen space z (screen
+/// depth) in [0, 1].
+fn vertex(c: &Ctx, path: &str, v: Vec3, space: Space) -> R<[f64; 3]> {
+    let v = c.vec3(path, v)?;
     if space == Space::Screen {
-        c.num(&format!("{path}[2]"), v[2], Range::Closed(0.0, 1.0))
-            .map_err(|mut e| {
-                e.msg = format!("{} (screen depth z: 0 = near, 1 = far)", e.msg);
-                e
-            })?;
+        c.num(&format!("{path}[2]"), v[2], UNIT).map_err(|mut e| {
+            e.msg = format!("{} (screen depth z: 0 = near, 1 = far)", e.msg);
+            e
+        })?;
     }
     Ok(v)
 }
@@ -304,26 +335,16 @@ fn material(c: &Ctx, p: &str, o: &RawObject) -> R<Material> {
             &format!("{p}.reflectance"),
             o.reflectance,
             d.reflectance,
-            Range::Closed(0.0, 1.0),
+            UNIT,
         )?,
-        specular: c.opt(
-            &format!("{p}.specular"),
-            o.specular,
-            d.specular,
-            Range::Ge(0.0),
-        )?,
+        specular: c.opt(&format!("{p}.specular"), o.specular, d.specular, INTENSITY)?,
         shininess: c.opt(
             &format!("{p}.shininess"),
             o.shininess,
             d.shininess,
-            Range::Gt(0.0),
+            SHININESS,
         )?,
-        emissive: c.opt(
-            &format!("{p}.emissive"),
-            o.emissive,
-            d.emissive,
-            Range::Ge(0.0),
-        )?,
+        emissive: c.opt(&format!("{p}.emissive"), o.emissive, d.emissive, INTENSITY)?,
     })
 }
 
@@ -336,7 +357,10 @@ fn value_number(v: &toml::Value) -> Option<f64> {
 }
 
 fn intensity_list(c: &Ctx, path: &str, v: &toml::Value, n: usize) -> R<Vec<f64>> {
-    let what = format!("an array of {n} finite numbers >= 0 (one per vertex)");
+    let what = format!(
+        "an array of {n} finite numbers in [0, {}] (one per vertex)",
+        num(crate::scene::MAX_INTENSITY)
+    );
     let toml::Value::Array(a) = v else {
         return Err(c.err(path, format!("must be {what}, got {v}")));
     };
@@ -348,14 +372,14 @@ fn intensity_list(c: &Ctx, path: &str, v: &toml::Value, n: usize) -> R<Vec<f64>>
         .map(|(k, x)| {
             let p = format!("{path}[{k}]");
             let x = value_number(x)
-                .ok_or_else(|| c.err(&p, format!("must be a finite number >= 0, got {x}")))?;
-            c.num(&p, x, Range::Ge(0.0))
+                .ok_or_else(|| c.err(&p, format!("must be {}, got {x}", INTENSITY.describe())))?;
+            c.num(&p, x, INTENSITY)
         })
         .collect()
 }
 
 fn scalar_intensity(c: &Ctx, p: &str, kind: &str, v: Option<&toml::Value>) -> R<f64> {
-    let what = "a finite number >= 0";
+    let what = INTENSITY.describe();
     let v = c.required(
         p,
         "intensity",
@@ -364,5 +388,5 @@ fn scalar_intensity(c: &Ctx, p: &str, kind: &str, v: Option<&toml::Value>) -> R<
     )?;
     let path = format!("{p}.intensity");
     let x = value_number(v).ok_or_else(|| c.err(&path, format!("must be {what}, got {v}")))?;
-    c.num(&path, x, Range::Ge(0.0))
+    c.num(&path, x, INTENSITY)
 }
