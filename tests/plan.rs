@@ -197,7 +197,7 @@ fn the_mask_half_size_advice_is_enough_to_follow() {
     }
     // Beyond the largest configurable half-size the advice is to narrow the lens.
     let text = include_str!("../src/scene/default.toml")
-        .replace("lens_radius = 0.06 ", "lens_radius = 6.0 ");
+        .replace("lens_radius = 0.06 ", "lens_radius = 2.0 ");
     let s = Scene::from_toml(&igemu::files::TomlFile::from_text("lens.toml", &text)).unwrap();
     let e = render(&s, &HwConfig::default_config(), RunOptions::FAST)
         .err()

@@ -109,7 +109,8 @@ pub fn plan_layers(
                 )
             };
             return Err(format!(
-                "the largest blur in the frame (screen z {z:.4}) is sigma {s:.2} px, a mask half-size M = {m} > dof.max_half_size = {}; {advice}",
+                "the largest blur in the frame (screen z {z:.4}) is sigma {:.2} px, a mask half-size M = {m} > dof.max_half_size = {}; {advice}",
+                s.abs(),
                 p.max_half_size
             ));
         }
@@ -151,7 +152,8 @@ pub fn plan_layers(
         let m = half_size(sigma, p.k);
         if m > p.max_half_size as usize {
             return Err(format!(
-                "a layer at screen z {z_mid:.4} needs sigma {sigma:.2} px, a mask half-size M = {m} > dof.max_half_size = {}; raise dof.max_half_size (at most {MAX_HALF_SIZE_LIMIT}) or reduce the lens radius",
+                "a layer at screen z {z_mid:.4} needs sigma {:.2} px, a mask half-size M = {m} > dof.max_half_size = {}; raise dof.max_half_size (at most {MAX_HALF_SIZE_LIMIT}) or reduce the lens radius",
+                sigma.abs(),
                 p.max_half_size
             ));
         }
