@@ -107,7 +107,7 @@ fn a_plan_over_the_memory_limit_is_refused_before_anything_runs() {
 }
 
 #[test]
-fn an_8192_square_screen_is_refused_quickly_under_the_default_limit() {
+fn an_8192_square_screen_is_refused_before_anything_runs() {
     // The documented maximum resolution with the default scene needs far more than half of
     // a 24 GiB machine; a 4 GiB limit stands in for a smaller machine.
     let text = include_str!("../src/scene/default.toml")
@@ -128,7 +128,8 @@ fn an_8192_square_screen_is_refused_quickly_under_the_default_limit() {
         ..RunOptions::FAST
     };
     let e = render(&s, &h, opts).err().expect("refused");
-    assert!(t.elapsed().as_secs_f64() < 2.0);
+    // Before anything runs: no stage's seconds (a hang guard, not a speed target).
+    assert!(t.elapsed().as_secs_f64() < 10.0);
     assert!(e.to_string().contains("GiB"), "{e}");
 }
 

@@ -9,7 +9,6 @@
 //! `docs/reliability.md` for the measured peak against the estimate).
 
 use super::plan::Plan;
-use crate::config::HwConfig;
 use crate::scene::{HostScene, Primitive};
 use crate::stage::{RunOptions, StageId};
 use serde::Serialize;
@@ -65,7 +64,7 @@ fn fragments(p: &Primitive, n: f64, region_samples: f64) -> f64 {
 }
 
 /// Estimates the memory a run of `plan` needs.
-pub fn estimate(plan: &Plan, host: &HostScene, hw: &HwConfig, opts: RunOptions) -> Estimate {
+pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
     let l = &plan.layout;
     let region_samples = l.samples.len() as f64;
     let pixels = l.grid.pixels();
@@ -117,7 +116,6 @@ pub fn estimate(plan: &Plan, host: &HostScene, hw: &HwConfig, opts: RunOptions) 
         pixels as f64 * per_pixel,
         "image.width x image.height",
     );
-    let _ = hw;
     Estimate {
         bytes: parts.iter().map(|p| p.bytes).sum(),
         parts,

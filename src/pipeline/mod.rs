@@ -84,7 +84,7 @@ pub fn render_with(
     cache: Option<&Cache>,
 ) -> Result<Render> {
     let plan = plan::build(scene, hw)?;
-    check_memory(scene, &plan, hw, opts)?;
+    check_memory(scene, &plan, opts)?;
     let steps = run::run(scene, hw, &plan, opts, cache, None)?;
     let taps = &steps.last().expect("a plan runs stages").outcome.taps;
     let px = taps.fixed.pixels();
@@ -121,8 +121,8 @@ pub fn render_with(
 
 /// Refuses a plan whose memory estimate is over the limit (`opts.max_memory`, by default
 /// half the machine's memory), naming the fields that drive it.
-fn check_memory(scene: &Scene, plan: &Plan, hw: &HwConfig, opts: RunOptions) -> Result<()> {
-    let e = &plan.memory(hw, opts);
+fn check_memory(scene: &Scene, plan: &Plan, opts: RunOptions) -> Result<()> {
+    let e = &plan.memory(opts);
     let limit = opts.max_memory.unwrap_or_else(estimate::default_limit);
     if e.bytes <= limit {
         return Ok(());
@@ -171,7 +171,7 @@ pub fn run_through(
             ),
         }));
     }
-    check_memory(scene, &plan, hw, opts)?;
+    check_memory(scene, &plan, opts)?;
     let steps = run::run(scene, hw, &plan, opts, None, Some(last))?;
     let taps = steps.last().expect("the plan runs it").outcome.taps.clone();
     Ok((plan, taps))

@@ -256,12 +256,8 @@ pub struct TileReport {
 
 impl Plan {
     /// The memory estimate of running the plan with `opts`.
-    pub fn memory(
-        &self,
-        hw: &HwConfig,
-        opts: crate::stage::RunOptions,
-    ) -> super::estimate::Estimate {
-        super::estimate::estimate(self, &self.host, hw, opts)
+    pub fn memory(&self, opts: crate::stage::RunOptions) -> super::estimate::Estimate {
+        super::estimate::estimate(self, &self.host, opts)
     }
     /// The planned stages in run order.
     pub fn order(&self) -> &[StageId] {
@@ -289,7 +285,7 @@ impl Plan {
                 binned: l.tiles.count() as u64,
                 binned_pixels: l.tiles.touched_pixels(&l.region),
             },
-            memory: self.memory(hw, opts),
+            memory: self.memory(opts),
             notes: self.notes(hw, opts),
         }
     }
