@@ -1,6 +1,7 @@
 //! Safe outputs: every file is written to a temporary in its folder and renamed (a killed
 //! render never leaves a truncated PNG; a failed write leaves no temporary), an output that
-//! is an input is refused, and a closed stdout ends the program quietly.
+//! is an input is refused, two outputs on one path are refused, and a closed stdout ends the
+//! program quietly.
 
 mod common;
 
@@ -336,6 +337,45 @@ fn an_output_that_is_an_input_is_refused_and_the_input_is_unchanged() {
     }
     assert!(!d.join("ok.png").exists(), "refused before any work");
     assert!(!d.join("rows.jsonl").exists(), "refused before any work");
+}
+
+/// Two outputs of one render naming the same file (directly, through `..` or `./`, before
+/// it exists) are refused before any work: the second would silently replace the first.
+#[test]
+fn two_outputs_on_one_path_are_refused() {
+    let d = dir("same");
+    let png = s(&d.join("x.png"));
+    let dotdot = s(&d.join("..").join(d.file_name().unwrap()).join("x.png"));
+    let dump = format!("accumulate={png}");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["render", "-o", &png, "--report", &png], "--report"),
+        (
+            vec!["render", "-o", &png, "--diff-out", &dotdot],
+            "--diff-out",
+        ),
+        (vec!["render", "-o", &png, "--dump", &dump], "--dump"),
+        (
+            vec![
+                "render",
+                "-o",
+                &dotdot,
+                "--reference-out",
+                &png,
+                "--banding-out",
+                &png,
+            ],
+            "--reference-out",
+        ),
+    ];
+    for (args, flag) in &cases {
+        let (code, out, err) = igemu(args);
+        assert_eq!(code, 2, "{args:?}: {out}{err}");
+        assert!(
+            err.contains(&format!("{flag}: ")) && err.contains("is also the output of --out"),
+            "{args:?}: {err}"
+        );
+        assert!(names(&d).is_empty(), "{args:?}: refused before any work");
+    }
 }
 
 /// Runs the binary with its stdout on a pipe whose reader is already closed: (exit code,

@@ -1,7 +1,8 @@
 //! An output never overwrites an input: each command collects its input files (scene
 //! files, the `--hw` file, the `--grid` file) by canonical path and checks every output
 //! path against them before any work. An output that does not exist yet cannot be an
-//! input; a symbolic link or a `..` path to an input is the input.
+//! input; a symbolic link or a `..` path to an input is the input. Two outputs of one
+//! command may not name the same file either (the second would replace the first).
 
 use crate::args::{SceneArgs, arg_error};
 use igemu::error::Error;
@@ -63,4 +64,38 @@ impl Inputs {
             None => Ok(()),
         }
     }
+}
+
+/// Where `p` would be written: its folder canonicalised (when it exists) joined with its
+/// file name, so `a/../x.png` and `x.png` compare equal before either exists.
+fn destination(p: &str) -> PathBuf {
+    let path = Path::new(p);
+    if let Ok(c) = std::fs::canonicalize(path) {
+        return c;
+    }
+    let parent = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match (std::fs::canonicalize(parent), path.file_name()) {
+        (Ok(d), Some(n)) => d.join(n),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Refuses two outputs (flag, path) that name the same file.
+pub fn distinct_outputs(outs: &[(&str, &str)]) -> Result<(), Error> {
+    let dest: Vec<PathBuf> = outs.iter().map(|(_, p)| destination(p)).collect();
+    for j in 1..outs.len() {
+        if let Some(i) = (0..j).find(|&i| dest[i] == dest[j]) {
+            return Err(arg_error(
+                outs[j].0,
+                format!(
+                    "{} is also the output of {}; give each output its own path",
+                    outs[j].1, outs[i].0
+                ),
+            ));
+        }
+    }
+    Ok(())
 }

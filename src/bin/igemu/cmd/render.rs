@@ -4,7 +4,7 @@
 //! ([`igemu::output::AtomicFile`]); no output may be an input.
 
 use crate::args::{DumpTap, SceneArgs, arg_error, parse_dump};
-use crate::guard::Inputs;
+use crate::guard::{Inputs, distinct_outputs};
 use crate::out::outln;
 use crate::print::print_report;
 use clap::Args;
@@ -53,20 +53,20 @@ pub struct RenderArgs {
 /// Runs `igemu render`; returns the exit code.
 pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
     let inputs = Inputs::of(&a.s);
-    inputs.check("--out", &a.out)?;
+    let mut outs = vec![("--out", a.out.as_str())];
     for (flag, p) in [
         ("--reference-out", &a.reference_out),
         ("--diff-out", &a.diff_out),
         ("--banding-out", &a.banding_out),
         ("--report", &a.report),
     ] {
-        if let Some(p) = p {
-            inputs.check(flag, p)?;
-        }
+        outs.extend(p.as_deref().map(|p| (flag, p)));
     }
-    for (_, p) in &a.dump {
-        inputs.check("--dump", p)?;
+    outs.extend(a.dump.iter().map(|(_, p)| ("--dump", p.as_str())));
+    for (flag, p) in &outs {
+        inputs.check(flag, p)?;
     }
+    distinct_outputs(&outs)?;
     let rom_dir = a.rom_out.as_deref().map(std::path::Path::new);
     if let Some(dir) = rom_dir {
         inputs.check_in("--rom-out", dir, [igemu::cost::rom::MANIFEST])?;
