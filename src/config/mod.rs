@@ -33,7 +33,10 @@ pub use dither::FRAC_BITS as DITHER_FRAC_BITS;
 pub use dither::{
     BLUE_NOISE_SIZES, DitherCfg, DitherKind, ERROR_INT_BITS, MAX_ERROR_FRAC_BITS, Placement,
 };
-pub use dof::{DOF_BITS, DofCfg, MAX_HALF_SIZE_LIMIT};
+pub use dof::{
+    DOF_BITS, DofCfg, DofKind, DownsampleCfg, LuminanceCfg, MAX_HALF_SIZE_LIMIT, SIGMA_ROM_BITS,
+    SigmaForm,
+};
 pub use gamma::{DAC_BITS, GammaCfg, MAX_GAMMA};
 pub use input::InputCfg;
 pub use presets::PRESETS;

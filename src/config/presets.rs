@@ -2,8 +2,8 @@
 //! 8-bit linear accumulators, and 8- or 7-bit log codes with potentiation or log arithmetic.
 
 use super::{
-    AccumulateCfg, CodingCfg, CyclesCfg, DitherCfg, DofCfg, FilterKind, GammaCfg, HwConfig,
-    InputCfg, RasterCfg, VisibilityCfg,
+    AccumulateCfg, CodingCfg, CyclesCfg, DitherCfg, DofCfg, DofKind, DownsampleCfg, FilterKind,
+    GammaCfg, HwConfig, InputCfg, LuminanceCfg, RasterCfg, SigmaForm, VisibilityCfg,
 };
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
 
@@ -61,6 +61,9 @@ pub fn preset(name: &str) -> Option<HwConfig> {
         cycles: CyclesCfg::default_for(acc_bits),
         dither: DitherCfg::default(),
         dof: DofCfg {
+            kind: DofKind::Layered,
+            sigma: SigmaForm::Paper,
+            sigma_rom_bits: 10,
             p: 0.1,
             k: 0.05,
             coef_bits: 12,
@@ -72,6 +75,8 @@ pub fn preset(name: &str) -> Option<HwConfig> {
             max_half_size: 32,
             quant: Quant::RndConv,
             overflow: Overflow::Sat,
+            luminance: LuminanceCfg::default(),
+            downsample: DownsampleCfg::default(),
         },
         coding,
     })

@@ -6,7 +6,9 @@ use super::accumulate::{GAUSSIAN_SIGMA, MAX_WEIGHT_BITS};
 use super::coding::{ACC_FRAC_BITS, MAX_LOG_BITS, MIN_LOG_BITS, TABLE_ADDR_BITS, TABLE_FRAC_BITS};
 use super::cycles::{CLOCK_MHZ, FRAME_PORT_BITS, TILE, TIMED, TIMING_RANGES};
 use super::dither::{BLUE_NOISE_SIZES, ERROR_INT_BITS, FRAC_BITS, MAX_ERROR_FRAC_BITS};
-use super::dof::{DOF_BITS, MAX_HALF_SIZE_LIMIT};
+use super::dof::{
+    DOF_BITS, DofKind, DownsampleCfg, LuminanceCfg, MAX_HALF_SIZE_LIMIT, SIGMA_ROM_BITS,
+};
 use super::gamma::{DAC_BITS, MAX_GAMMA};
 use super::raster::{INTERP_GUARD_BITS, MAX_GUARD_BAND};
 use super::{MAX_LUT_ADDRESS_BITS, MAX_SUBPIXEL_BITS, PRESETS};
@@ -112,8 +114,21 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         ("dither", "seed") => s("an integer in 0..=18446744073709551615"),
         ("dither", "frame") => s("an integer in 0..=4294967295 (the frame number)"),
         ("dof", "") => table(
-            "p, k, coef_bits, alpha_bits, guard_bits, line_bits, acc_bits, max_half_size, quant, overflow",
+            "kind, sigma, sigma_rom_bits, p, k, coef_bits, alpha_bits, guard_bits, line_bits, acc_bits, max_half_size, quant, overflow, and the tables [dof.luminance], [dof.downsample]",
         ),
+        ("dof", "kind") => format!("one of {}", names(DofKind::ALL.iter().map(|k| k.name()))),
+        ("dof", "sigma") => s("one of \"paper\", \"affine\""),
+        ("dof", "sigma_rom_bits") => range(&SIGMA_ROM_BITS),
+        ("dof", f) if f == "luminance" || f.starts_with("luminance.") => LuminanceCfg::hint(
+            f.strip_prefix("luminance")
+                .unwrap_or("")
+                .trim_start_matches('.'),
+        )?,
+        ("dof", f) if f == "downsample" || f.starts_with("downsample.") => DownsampleCfg::hint(
+            f.strip_prefix("downsample")
+                .unwrap_or("")
+                .trim_start_matches('.'),
+        )?,
         ("dof", "p") => s("a finite number in (0, 1) (the layer difference-degree threshold)"),
         ("dof", "k") => s("a finite number in (0, 1) (the mask's edge/centre ratio)"),
         ("dof", "max_half_size") => {

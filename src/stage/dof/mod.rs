@@ -80,9 +80,11 @@
 mod cost;
 mod fixed;
 mod float;
+mod layered;
 mod layers;
 mod lens;
 mod mask;
+mod method;
 mod reference;
 mod stage;
 
@@ -96,8 +98,9 @@ pub use float::layered_f64;
 pub use layers::{DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layers};
 pub use lens::{G_FRAC, LensMap, SIGMA_FRAC};
 pub use mask::{difference_degree, half_size, mask_difference, taps_f64, taps_fixed};
+pub use method::Method;
 pub use reference::{
-    RegionError, additive_layered, edge_band, local_error, per_pixel_scatter, region_error,
-    weber_linear,
+    RegionError, additive_layered, depth_edge_band, edge_band, local_error, per_pixel_scatter,
+    region_error, weber_linear,
 };
 pub use stage::Dof;

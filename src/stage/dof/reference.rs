@@ -84,7 +84,7 @@ pub fn additive_layered(
     out
 }
 
-/// Pixels within `r` of a pixel of another layer (the depth-edge band).
+/// Pixels within `r` of a pixel of another layer (the depth-edge band of a layer plan).
 pub fn edge_band(w: usize, h: usize, index: &[u16], r: usize) -> Vec<bool> {
     let mut edge = vec![false; w * h];
     for y in 0..h {
@@ -97,7 +97,38 @@ pub fn edge_band(w: usize, h: usize, index: &[u16], r: usize) -> Vec<bool> {
             }
         }
     }
-    // dilate by r (square), separably
+    dilate(&edge, w, h, r)
+}
+
+/// The depth-edge band of a frame, the same for every method: pixels within `r` of a
+/// depth edge, where a depth edge is a partly covered pixel (a silhouette) or a pixel whose
+/// blur differs by more than one pixel from its right or lower neighbour's (`|sigma|` of the
+/// depth codes, the background at infinity).
+pub fn depth_edge_band(
+    w: usize,
+    h: usize,
+    key: &[u32],
+    cov: &[u16],
+    n2: u32,
+    lens: &LensMap,
+    r: usize,
+) -> Vec<bool> {
+    let sigma: Vec<f64> = key.iter().map(|&k| lens.sigma_f64(k)).collect();
+    let mut edge = vec![false; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let partial = cov[i] > 0 && u32::from(cov[i]) < n2;
+            let right = x + 1 < w && (sigma[i] - sigma[i + 1]).abs() > 1.0;
+            let down = y + 1 < h && (sigma[i] - sigma[i + w]).abs() > 1.0;
+            edge[i] = partial || right || down;
+        }
+    }
+    dilate(&edge, w, h, r)
+}
+
+/// `edge` dilated by `r` pixels (a square window), separably.
+fn dilate(edge: &[bool], w: usize, h: usize, r: usize) -> Vec<bool> {
     let mut tmp = vec![false; w * h];
     for y in 0..h {
         for x in 0..w {
@@ -105,13 +136,14 @@ pub fn edge_band(w: usize, h: usize, index: &[u16], r: usize) -> Vec<bool> {
             tmp[y * w + x] = edge[y * w + a..y * w + b].iter().any(|&e| e);
         }
     }
+    let mut out = vec![false; w * h];
     for y in 0..h {
         for x in 0..w {
             let (a, b) = (y.saturating_sub(r), (y + r + 1).min(h));
-            edge[y * w + x] = (a..b).any(|yy| tmp[yy * w + x]);
+            out[y * w + x] = (a..b).any(|yy| tmp[yy * w + x]);
         }
     }
-    edge
+    out
 }
 
 /// Error of an image against a reference, overall and split into depth-edge band and interior.

@@ -1,37 +1,74 @@
-//! The dof stage through the contract: the thin lens's blur per depth code, the layer plan
-//! grown far to near, the fixed layered convolution and compositing of the finished frame,
-//! its float references (the same layers in f64; on request the per-pixel scatter and the
-//! layer theorem check), the stage-local comparison, one cycle-model token per layer, the
-//! cost and the coefficient ROM.
+//! The dof stage through the contract: the thin lens's blur per depth code, then the method
+//! `dof.kind` names ([`super::method::Method`]: layered, luminance-aware or
+//! downsample-and-blend) on the finished frame, its float reference (the same method in f64;
+//! on request the per-pixel scatter and, for the layered method, the layer theorem check),
+//! the stage-local comparison, the method's cycle-model tokens, cost and ROMs.
 
+use super::layered::Layered;
+use super::method::{Method, n2};
 use super::{
     DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, difference_degree,
-    edge_band, layer_work, layered_f64, layered_fixed, local_error, overflow_signal,
-    overflow_signal_in, per_pixel_scatter, plan_layers, region_error, weber_linear,
+    edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
 };
-use crate::config::{CodingKind, HwConfig};
+use crate::config::{CodingKind, DofKind, HwConfig};
 use crate::error::{Error, FileError, Result};
 use crate::scene::{Lens, Scene};
+use crate::stage::accumulate::Frame;
 use crate::stage::taps::{FrameCoding, FrameTap, Taps};
-use crate::stage::{
-    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, TokenKind, Tokens,
-};
+use crate::stage::{Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, Tokens};
 use std::sync::Arc;
 
-/// What the fixed model leaves: the lens, the layer plan, and the frame it blurred.
+/// The plan of the configured method.
+pub enum MethodPlan {
+    /// `dof.kind = "layered"`.
+    Layered(LayerPlan),
+}
+
+/// Runs `$body` with `$m` bound to the method and `$plan` to its plan.
+macro_rules! with_method {
+    ($mp:expr, |$m:ident, $plan:ident| $body:expr) => {
+        match $mp {
+            MethodPlan::Layered($plan) => {
+                let $m = &Layered;
+                $body
+            }
+        }
+    };
+}
+
+/// What the fixed model leaves: the lens, the method's plan, and the frame it blurred.
 pub struct Blurred {
     lens: LensMap,
-    plan: LayerPlan,
+    plan: MethodPlan,
     input: Arc<FrameTap>,
+}
+
+impl Blurred {
+    /// The float method on `value` with the input frame's depth and coverage.
+    fn float(&self, cx: &Cx, value: &[f64]) -> Vec<f64> {
+        with_method!(&self.plan, |m, plan| m.float(
+            cx,
+            plan,
+            &self.input.frame,
+            value,
+            &self.lens
+        ))
+    }
 }
 
 /// The dof stage.
 pub struct Dof;
 
-fn n2(hw: &HwConfig) -> u32 {
-    hw.raster.samples * hw.raster.samples
+fn run<M: Method>(
+    m: &M,
+    cx: &Cx,
+    frame: &Frame,
+    lens: &LensMap,
+    wrap: impl FnOnce(M::Plan) -> MethodPlan,
+) -> Result<(MethodPlan, Vec<u32>, Facts)> {
+    let (plan, out, facts) = m.fixed(cx, frame, lens)?;
+    Ok((wrap(plan), out, facts))
 }
-
 impl Stage for Dof {
     type Fixed = Blurred;
 
@@ -60,9 +97,24 @@ impl Stage for Dof {
                 ),
             }));
         }
+        let method = match hw.dof.kind {
+            DofKind::Layered => format!("layered blur of the frame, threshold P = {}", hw.dof.p),
+            k => {
+                return Err(Error::File(FileError {
+                    file: hw.name.clone(),
+                    line: None,
+                    col: None,
+                    field: "dof.kind".into(),
+                    msg: format!(
+                        "dof.kind = \"{}\" is not built yet; use \"layered\"",
+                        k.name()
+                    ),
+                }));
+            }
+        };
         Ok(Need::yes(format!(
-            "thin lens (radius {lens_radius}, focus at {focus_distance}): layered blur of the frame, threshold P = {}",
-            hw.dof.p
+            "thin lens (radius {lens_radius}, focus at {focus_distance}, sigma {}): {method}",
+            hw.dof.sigma.name()
         )))
     }
 
@@ -81,48 +133,15 @@ impl Stage for Dof {
             .clone()
             .expect("accumulate wrote the frame");
         let frame = &input.frame;
-        let (w, h) = (frame.width as usize, frame.height as usize);
         let lens = LensMap::from_camera(
             &cx.scene.camera,
             frame.height,
             hw.visibility.z.format.frac_bits,
         )
         .expect("the plan runs dof for a thin lens only");
-        let p = &hw.dof;
-        let frame_fmt = hw.accumulate.frame.format;
-        let plan = plan_layers(&frame.depth, &frame.coverage, n2(hw), &lens, p).map_err(|msg| {
-            Error::File(FileError {
-                file: hw.name.clone(),
-                line: None,
-                col: None,
-                field: "dof.max_half_size".into(),
-                msg,
-            })
-        })?;
-        let img = DepthImage::of_frame(frame, &frame.acc, n2(hw));
-        let (out, work) =
-            layered_fixed(&img, &plan, p, frame_fmt).map_err(|(signal, bits)| Error::Overflow {
-                signal,
-                format: format!("UQ{bits}.0"),
-                value: 1i128 << bits,
-                min: 0,
-                max: ((1u128 << bits.min(63)) - 1) as i64,
-            })?;
-        let mut facts = Facts {
-            work: vec![
-                ("layers", plan.layers.len() as u64),
-                ("pixels", (w * h) as u64),
-                ("macs", work.macs),
-                ("divides", work.divides),
-                ("composites", work.composites),
-                ("passthrough", work.passthrough),
-            ],
-            signals: vec![
-                overflow_signal("dof.line", p.line_bits, work.line_overflows),
-                overflow_signal("dof.acc", p.acc_bits, work.acc_overflows),
-                overflow_signal_in("dof.out", frame_fmt, work.out_overflows),
-            ],
-            ..Facts::default()
+        let (plan, out, mut facts) = match hw.dof.kind {
+            DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
+            DofKind::Luminance | DofKind::Downsample => unreachable!("refused by the plan"),
         };
         // Blur facts.
         let (mut sig_min, mut sig_max) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -141,7 +160,6 @@ impl Stage for Dof {
             }
         }
         facts.note("lens", lens);
-        facts.note("layers", &plan.layers);
         facts.note(
             "object_sigma_px",
             serde_json::json!({"min": sig_min, "max": sig_max, "background": lens.sigma_f64(u32::MAX)}),
@@ -157,49 +175,24 @@ impl Stage for Dof {
         Ok((Blurred { lens, plan, input }, facts))
     }
 
-    /// (1) The same layers and masks in f64 on the float frame; with `dof_reference` also
-    /// (2) the per-pixel scatter of the fixed input frame and the layer theorem's check.
+    /// (1) The same method in f64 on the float frame; with `dof_reference` also (2) the
+    /// per-pixel scatter of the fixed input frame against the fixed output (split into the
+    /// depth-edge band and the interior) and, for the layered method, the layer theorem's
+    /// check.
     fn float(&self, cx: &Cx, b: &Blurred, taps: &mut Taps, notes: &mut Notes) -> Result<()> {
-        let frame = &b.input.frame;
-        let n2 = n2(cx.hw);
-        let frame_ref = taps.float.frame();
-        let rimg = DepthImage::of_frame(frame, frame_ref, n2);
-        let new_ref = layered_f64(&rimg, &b.plan);
+        let new_ref = b.float(cx, taps.float.frame());
         if cx.opts.dof_reference {
-            let p = &cx.hw.dof;
-            let (w, h) = (frame.width as usize, frame.height as usize);
-            let accf: Vec<f64> = frame.acc.iter().map(|&v| v as f64).collect();
-            let fimg = DepthImage::of_frame(frame, &accf, n2);
-            let out = &taps.fixed.frame().frame.acc;
-            let outf: Vec<f64> = out.iter().map(|&v| v as f64).collect();
-            let white = cx.hw.accumulate.frame.format.max_code() as f64;
-            let t = std::time::Instant::now();
-            let pp = per_pixel_scatter(&fimg, &b.lens, p.k);
-            let pp_ms = crate::stage::ms_since(t);
-            let m_max = b.plan.layers.iter().map(|l| l.m).max().unwrap_or(0);
-            let edge = edge_band(w, h, &b.plan.index, m_max);
-            let add_f = additive_layered(&fimg, &b.plan, p.coef_bits, false);
-            let add_q = additive_layered(&fimg, &b.plan, p.coef_bits, true);
-            let v = |x: &RegionError| serde_json::to_value(x).unwrap_or_default();
             notes.insert(
                 "per_pixel_reference".into(),
-                serde_json::json!({
-                    "ms": pp_ms,
-                    "theorem_additive_float_difference_degree": difference_degree(&add_f, &pp),
-                    "theorem_additive_fixed_coef_difference_degree": difference_degree(&add_q, &pp),
-                    "p": p.p,
-                    "composited_fixed": v(&region_error(&outf, &pp, &edge)),
-                    "weber_fixed": serde_json::to_value(weber_linear(&outf, &pp, white, &cx.scene.display)).unwrap_or_default(),
-                    "edge_band_px": m_max,
-                }),
+                per_pixel_notes(cx, b, &taps.fixed.frame().frame.acc),
             );
         }
         taps.float.frame = Some(Arc::new(new_ref));
         Ok(())
     }
 
-    /// The same layers in f64 on the fixed input frame against the fixed output, code by
-    /// code (and through the display: note `weber_vs_layered_float`).
+    /// The same method in f64 on the fixed input frame against the fixed output, code by
+    /// code (and through the display: note `weber_vs_float_method`).
     fn local(
         &self,
         cx: &Cx,
@@ -208,47 +201,65 @@ impl Stage for Dof {
         out: &Taps,
         notes: &mut Notes,
     ) -> Option<LocalError> {
-        let frame = &b.input.frame;
-        let accf: Vec<f64> = frame.acc.iter().map(|&v| v as f64).collect();
-        let fimg = DepthImage::of_frame(frame, &accf, n2(cx.hw));
-        let local = layered_f64(&fimg, &b.plan);
+        let accf: Vec<f64> = b.input.frame.acc.iter().map(|&v| v as f64).collect();
+        let local = b.float(cx, &accf);
         let white = cx.hw.accumulate.frame.format.max_code() as f64;
         let o = &out.fixed.frame().frame.acc;
         let outf: Vec<f64> = o.iter().map(|&v| v as f64).collect();
         notes.insert(
-            "weber_vs_layered_float".into(),
+            "weber_vs_float_method".into(),
             serde_json::to_value(weber_linear(&outf, &local, white, &cx.scene.display))
                 .unwrap_or_default(),
         );
         Some(local_error(o, &local, white))
     }
 
-    /// One token per layer: the output samples of both 1-D passes over its box.
     fn tokens(&self, cx: &Cx, b: &Blurred) -> Option<Tokens> {
-        let g = &cx.layout.grid;
-        let layers = layer_work(&b.plan, g.width as usize, g.height as usize);
-        Some(Tokens {
-            kind: TokenKind::Layer,
-            item: "pass outputs",
-            items: layers.iter().map(|l| 2 * l.pixels).collect(),
-            port_bits: vec![],
-        })
+        Some(with_method!(&b.plan, |m, plan| m.tokens(cx, plan)))
     }
 
     fn cost(&self, cx: &Cx, b: &Blurred) -> Cost {
-        let g = &cx.layout.grid;
-        super::cost(
-            &b.plan,
-            &cx.hw.dof,
-            g.width as u64,
-            g.height as u64,
-            cx.hw.accumulate.frame.format.total_bits(),
-            n2(cx.hw),
-            &b.lens,
-        )
+        with_method!(&b.plan, |m, plan| m.cost(cx, plan, &b.lens))
     }
 
     fn memories(&self, cx: &Cx, b: &Blurred, _: &Taps) -> Vec<MemImage> {
-        vec![super::coefficient_image(&b.plan, &cx.hw.dof)]
+        with_method!(&b.plan, |m, plan| m.memories(cx, plan, &b.lens))
     }
+}
+
+/// The per-pixel scatter of the fixed input frame (every pixel spread with the mask of its
+/// own depth, no occlusion) against the fixed output; for the layered method also the
+/// theorem's additive layered sum against it.
+fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
+    let frame = &b.input.frame;
+    let p = &cx.hw.dof;
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let accf: Vec<f64> = frame.acc.iter().map(|&v| v as f64).collect();
+    let fimg = DepthImage::of_frame(frame, &accf, n2(cx));
+    let outf: Vec<f64> = out.iter().map(|&v| v as f64).collect();
+    let white = cx.hw.accumulate.frame.format.max_code() as f64;
+    let t = std::time::Instant::now();
+    let pp = per_pixel_scatter(&fimg, &b.lens, p.k);
+    let pp_ms = crate::stage::ms_since(t);
+    let v = |x: &RegionError| serde_json::to_value(x).unwrap_or_default();
+    let mut notes = serde_json::json!({
+        "ms": pp_ms,
+        "p": p.p,
+        "weber_fixed": serde_json::to_value(weber_linear(&outf, &pp, white, &cx.scene.display)).unwrap_or_default(),
+    });
+    let (edge, r) = match &b.plan {
+        MethodPlan::Layered(plan) => {
+            let add_f = additive_layered(&fimg, plan, p.coef_bits, false);
+            let add_q = additive_layered(&fimg, plan, p.coef_bits, true);
+            notes["theorem_additive_float_difference_degree"] =
+                difference_degree(&add_f, &pp).into();
+            notes["theorem_additive_fixed_coef_difference_degree"] =
+                difference_degree(&add_q, &pp).into();
+            let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0);
+            (edge_band(w, h, &plan.index, m_max), m_max)
+        }
+    };
+    notes["composited_fixed"] = v(&region_error(&outf, &pp, &edge));
+    notes["edge_band_px"] = r.into();
+    notes
 }

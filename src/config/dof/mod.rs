@@ -1,0 +1,234 @@
+//! `[dof]`: the depth-of-field stage (docs/dof.md): which method (`kind`), how the blur
+//! per depth code is computed (`sigma`, `sigma_rom_bits`), the layered datapath's widths, and
+//! the `[dof.luminance]` and `[dof.downsample]` methods' own sections.
+
+mod downsample;
+mod luminance;
+
+pub use downsample::{DownsampleCfg, RawDownsample};
+pub use luminance::{LuminanceCfg, RawLuminance};
+
+use super::set;
+use crate::fixed::{Overflow, Quant};
+use serde::{Deserialize, Serialize};
+
+/// The depth-of-field method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DofKind {
+    /// Layered adaptive convolution of the depth image (one mask per depth layer).
+    Layered,
+    /// Luminance-aware blur: mean pre-blur, bright neighbours bleed into darker ones, blended
+    /// with the sharp frame by the normalised blur factor.
+    Luminance,
+    /// Downsample to 1/16 of the area, separable Gaussian, blended with the sharp frame per
+    /// pixel by the circle of confusion (Poisson-disc taps).
+    Downsample,
+}
+
+impl DofKind {
+    /// Every kind, in the order the docs list them.
+    pub const ALL: [DofKind; 3] = [DofKind::Layered, DofKind::Luminance, DofKind::Downsample];
+
+    /// The name in a hardware file.
+    pub fn name(self) -> &'static str {
+        match self {
+            DofKind::Layered => "layered",
+            DofKind::Luminance => "luminance",
+            DofKind::Downsample => "downsample",
+        }
+    }
+}
+
+/// How the blur per depth code is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SigmaForm {
+    /// The paper's eq. 3: beyond the in-focus band the object distance is shifted by `deep`
+    /// toward the focus, `sigma = K (1/U - 1/(D - deep))` (in front: `D + deep`); the
+    /// hardware reads sigma from a ROM indexed by the top `sigma_rom_bits` of the depth code,
+    /// interpolating linearly between entries.
+    Paper,
+    /// Shifted in inverse depth instead, so sigma is affine in the depth code: one multiply
+    /// per pixel, no ROM (the first version's form).
+    Affine,
+}
+
+impl SigmaForm {
+    /// The name in a hardware file.
+    pub fn name(self) -> &'static str {
+        match self {
+            SigmaForm::Paper => "paper",
+            SigmaForm::Affine => "affine",
+        }
+    }
+}
+
+/// `dof.sigma_rom_bits`: depth-code bits that index the sigma ROM (`2^bits + 1` entries
+/// plus one for infinity).
+pub const SIGMA_ROM_BITS: std::ops::RangeInclusive<u32> = 4..=16;
+
+/// Largest configurable mask half-size M (pixels): a `(2M+1)`-tap line.
+pub const MAX_HALF_SIZE_LIMIT: u32 = 64;
+
+/// `dof.coef_bits`, `dof.alpha_bits`, `dof.guard_bits`, `dof.line_bits`, `dof.acc_bits`: the
+/// ranges of the word widths.
+pub const DOF_BITS: [(&str, u32, u32); 5] = [
+    ("coef_bits", 4, 20),
+    ("alpha_bits", 4, 24),
+    ("guard_bits", 0, 16),
+    ("line_bits", 8, 64),
+    ("acc_bits", 8, 96),
+];
+
+/// The `[dof]` section: the depth-of-field stage (used only with a thin-lens camera).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DofCfg {
+    /// The method.
+    pub kind: DofKind,
+    /// The blur per depth code.
+    pub sigma: SigmaForm,
+    /// Depth-code bits indexing the sigma ROM (`sigma = "paper"`).
+    pub sigma_rom_bits: u32,
+    /// Difference-degree threshold P of a layer, in (0, 1).
+    pub p: f64,
+    /// Mask cut ratio k (edge / centre), in (0, 1).
+    pub k: f64,
+    /// Fraction bits of the 1-D mask coefficients (UQ0.f; they sum to 2^f).
+    pub coef_bits: u32,
+    /// Fraction bits of the compositing alpha.
+    pub alpha_bits: u32,
+    /// Guard fraction bits of the layer colour and the composite.
+    pub guard_bits: u32,
+    /// Width of the line-buffer word (horizontal-pass sum of `x * m`).
+    pub line_bits: u32,
+    /// Width of the vertical-pass accumulator.
+    pub acc_bits: u32,
+    /// Largest mask half-size M the hardware holds.
+    pub max_half_size: u32,
+    /// Rounding of the composite to the frame format.
+    pub quant: Quant,
+    /// Overflow of the line buffer and accumulator (SAT or ERROR).
+    pub overflow: Overflow,
+    /// `[dof.luminance]`: the luminance-aware method.
+    pub luminance: LuminanceCfg,
+    /// `[dof.downsample]`: the downsample-and-blend method.
+    pub downsample: DownsampleCfg,
+}
+
+impl DofCfg {
+    /// Checks the `[dof]` fields; returns the failing field and the allowed range.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let p = self;
+        let err = |f: &str, m: String| Err((format!("dof.{f}"), m));
+        if !(p.p.is_finite() && p.p > 0.0 && p.p < 1.0) {
+            return err(
+                "p",
+                format!(
+                    "must be in (0, 1) (the layer difference-degree threshold), got {}",
+                    crate::files::num(p.p)
+                ),
+            );
+        }
+        if !(p.k.is_finite() && p.k > 0.0 && p.k < 1.0) {
+            return err(
+                "k",
+                format!(
+                    "must be in (0, 1) (mask edge/centre ratio), got {}",
+                    crate::files::num(p.k)
+                ),
+            );
+        }
+        let widths = [
+            p.coef_bits,
+            p.alpha_bits,
+            p.guard_bits,
+            p.line_bits,
+            p.acc_bits,
+        ];
+        for ((field, lo, hi), v) in DOF_BITS.into_iter().zip(widths) {
+            if !(lo..=hi).contains(&v) {
+                return err(field, format!("must be in {lo}..={hi}, got {v}"));
+            }
+        }
+        if !(1..=MAX_HALF_SIZE_LIMIT).contains(&p.max_half_size) {
+            return err(
+                "max_half_size",
+                format!(
+                    "must be in 1..={MAX_HALF_SIZE_LIMIT} pixels, got {}",
+                    p.max_half_size
+                ),
+            );
+        }
+        if !matches!(p.overflow, Overflow::Sat | Overflow::Error) {
+            return err(
+                "overflow",
+                format!("must be SAT or ERROR, got {:?}", p.overflow),
+            );
+        }
+        if !SIGMA_ROM_BITS.contains(&p.sigma_rom_bits) {
+            return err(
+                "sigma_rom_bits",
+                format!(
+                    "must be in {}..={} (depth-code bits indexing the sigma ROM), got {}",
+                    SIGMA_ROM_BITS.start(),
+                    SIGMA_ROM_BITS.end(),
+                    p.sigma_rom_bits
+                ),
+            );
+        }
+        p.luminance
+            .validate()
+            .map_err(|(f, m)| (format!("dof.luminance.{f}"), m))?;
+        p.downsample
+            .validate()
+            .map_err(|(f, m)| (format!("dof.downsample.{f}"), m))?;
+        Ok(())
+    }
+}
+
+/// `[dof]` as written in the hardware file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDof {
+    kind: Option<DofKind>,
+    sigma: Option<SigmaForm>,
+    sigma_rom_bits: Option<u32>,
+    p: Option<f64>,
+    k: Option<f64>,
+    coef_bits: Option<u32>,
+    alpha_bits: Option<u32>,
+    guard_bits: Option<u32>,
+    line_bits: Option<u32>,
+    acc_bits: Option<u32>,
+    max_half_size: Option<u32>,
+    quant: Option<Quant>,
+    overflow: Option<Overflow>,
+    luminance: Option<RawLuminance>,
+    downsample: Option<RawDownsample>,
+}
+
+impl RawDof {
+    /// Overrides the given fields.
+    pub(crate) fn apply(self, c: &mut DofCfg) {
+        set(&mut c.kind, self.kind);
+        set(&mut c.sigma, self.sigma);
+        set(&mut c.sigma_rom_bits, self.sigma_rom_bits);
+        set(&mut c.p, self.p);
+        set(&mut c.k, self.k);
+        set(&mut c.coef_bits, self.coef_bits);
+        set(&mut c.alpha_bits, self.alpha_bits);
+        set(&mut c.guard_bits, self.guard_bits);
+        set(&mut c.line_bits, self.line_bits);
+        set(&mut c.acc_bits, self.acc_bits);
+        set(&mut c.max_half_size, self.max_half_size);
+        set(&mut c.quant, self.quant);
+        set(&mut c.overflow, self.overflow);
+        if let Some(l) = self.luminance {
+            l.apply(&mut c.luminance);
+        }
+        if let Some(d) = self.downsample {
+            d.apply(&mut c.downsample);
+        }
+    }
+}

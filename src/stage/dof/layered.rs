@@ -1,0 +1,106 @@
+//! `dof.kind = "layered"` through the [`Method`] interface: the layer plan grown far to
+//! near, the fixed layered convolution and compositing, the same layers in f64, one
+//! cycle-model token per layer, the cost and the coefficient ROM.
+
+use super::method::{Method, n2};
+use super::{
+    DepthImage, LayerPlan, LensMap, layer_work, layered_f64, layered_fixed, overflow_signal,
+    overflow_signal_in, plan_layers,
+};
+use crate::error::{Error, FileError, Result};
+use crate::stage::accumulate::Frame;
+use crate::stage::{Cost, Cx, Facts, MemImage, TokenKind, Tokens};
+
+/// The layered method.
+pub struct Layered;
+
+impl Method for Layered {
+    type Plan = LayerPlan;
+
+    fn fixed(
+        &self,
+        cx: &Cx,
+        frame: &Frame,
+        lens: &LensMap,
+    ) -> Result<(LayerPlan, Vec<u32>, Facts)> {
+        let hw = cx.hw;
+        let p = &hw.dof;
+        let frame_fmt = hw.accumulate.frame.format;
+        let plan = plan_layers(&frame.depth, &frame.coverage, n2(cx), lens, p).map_err(|msg| {
+            Error::File(FileError {
+                file: hw.name.clone(),
+                line: None,
+                col: None,
+                field: "dof.max_half_size".into(),
+                msg,
+            })
+        })?;
+        let img = DepthImage::of_frame(frame, &frame.acc, n2(cx));
+        let (out, work) =
+            layered_fixed(&img, &plan, p, frame_fmt).map_err(|(signal, bits)| Error::Overflow {
+                signal,
+                format: format!("UQ{bits}.0"),
+                value: 1i128 << bits,
+                min: 0,
+                max: ((1u128 << bits.min(63)) - 1) as i64,
+            })?;
+        let mut facts = Facts {
+            work: vec![
+                ("layers", plan.layers.len() as u64),
+                ("pixels", frame.acc.len() as u64),
+                ("macs", work.macs),
+                ("divides", work.divides),
+                ("composites", work.composites),
+                ("passthrough", work.passthrough),
+            ],
+            signals: vec![
+                overflow_signal("dof.line", p.line_bits, work.line_overflows),
+                overflow_signal("dof.acc", p.acc_bits, work.acc_overflows),
+                overflow_signal_in("dof.out", frame_fmt, work.out_overflows),
+            ],
+            ..Facts::default()
+        };
+        facts.note("layers", &plan.layers);
+        Ok((plan, out, facts))
+    }
+
+    fn float(
+        &self,
+        cx: &Cx,
+        plan: &LayerPlan,
+        frame: &Frame,
+        value: &[f64],
+        _: &LensMap,
+    ) -> Vec<f64> {
+        layered_f64(&DepthImage::of_frame(frame, value, n2(cx)), plan)
+    }
+
+    /// One token per layer: the output samples of both 1-D passes over its box.
+    fn tokens(&self, cx: &Cx, plan: &LayerPlan) -> Tokens {
+        let g = &cx.layout.grid;
+        let layers = layer_work(plan, g.width as usize, g.height as usize);
+        Tokens {
+            kind: TokenKind::Layer,
+            item: "pass outputs",
+            items: layers.iter().map(|l| 2 * l.pixels).collect(),
+            port_bits: vec![],
+        }
+    }
+
+    fn cost(&self, cx: &Cx, plan: &LayerPlan, lens: &LensMap) -> Cost {
+        let g = &cx.layout.grid;
+        super::cost(
+            plan,
+            &cx.hw.dof,
+            g.width as u64,
+            g.height as u64,
+            cx.hw.accumulate.frame.format.total_bits(),
+            n2(cx),
+            lens,
+        )
+    }
+
+    fn memories(&self, cx: &Cx, plan: &LayerPlan, _: &LensMap) -> Vec<MemImage> {
+        vec![super::coefficient_image(plan, &cx.hw.dof)]
+    }
+}
