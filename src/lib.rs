@@ -39,3 +39,4 @@ pub mod scene;
 pub mod stage;
 pub mod stage_id;
 pub mod sweep;
+pub mod truth;

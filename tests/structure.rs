@@ -18,7 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["scene"],
     &["config"],
     &["stage"],
-    &["compare", "perceptual", "cycles", "cost"],
+    &["compare", "perceptual", "cycles", "cost", "truth"],
     &["pipeline"],
     &["analysis", "sweep", "hdl"],
 ];

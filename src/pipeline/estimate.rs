@@ -116,6 +116,19 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
         pixels as f64 * per_pixel,
         "image.width x image.height",
     );
+    if opts.dof_truth_samples > 0 && l.has(StageId::Dof) {
+        // The lens points rendered at once, each with a float sample buffer (at most the
+        // screen's) and float fragments; the group sums, the batch's frames, the mean and
+        // its error.
+        let batch = crate::truth::batch_size(opts.dof_truth_samples) as f64;
+        let groups = f64::from(crate::truth::GROUPS);
+        part(
+            "depth-of-field truth",
+            batch * (l.grid.samples() as f64 * 20.0 + frags * 24.0)
+                + (groups + batch + 2.0) * pixels as f64 * 8.0,
+            "--dof-truth: the threads, image.width x image.height and raster.samples",
+        );
+    }
     Estimate {
         bytes: parts.iter().map(|p| p.bytes).sum(),
         parts,

@@ -4,13 +4,15 @@
 //!
 //! A render is: build the plan (which stages, why, region, tiles), run the planned stages in
 //! order (each fixed model, its float reference and its stage-local comparison), compare
-//! the DAC codes end to end, and simulate the cycle model on the stages' tokens.
+//! the DAC codes end to end, and simulate the cycle model on the stages' tokens; on request
+//! compare both with the depth-of-field truth ([`truth`]).
 
 pub mod cache;
 pub mod estimate;
 pub mod plan;
 pub mod report;
 pub mod run;
+pub mod truth;
 
 pub use cache::Cache;
 pub use plan::{Plan, guard_band};
@@ -96,7 +98,7 @@ pub fn render_with(
         }
     };
     let ideal = report::ideal(scene, hw, &steps, cache);
-    let (report, workload, contour_map) = report::build(
+    let (mut report, workload, contour_map) = report::build(
         scene,
         hw,
         &plan,
@@ -107,6 +109,7 @@ pub fn render_with(
         cache,
         opts,
     );
+    report.dof_truth = truth::report(scene, hw, &plan, &steps, &dac, &dac_ref, cache, opts)?;
     Ok(Render {
         report,
         plan,

@@ -22,10 +22,8 @@ use crate::config::HwConfig;
 use crate::error::{FileError, Result};
 use crate::fnv::Fnv;
 use crate::scene::{GuardBand, HostScene, Scene, front_end};
-use crate::stage::accumulate::{Kernel, sample_region};
-use crate::stage::{
-    self, Grid, Layout, Need, Region, SampleRegion, StageId, Tiles, input, ms_since,
-};
+use crate::stage::accumulate::{Kernel, kernel, regions};
+use crate::stage::{self, Grid, Layout, Need, Region, StageId, Tiles, input, ms_since};
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -114,35 +112,13 @@ pub fn build(scene: &Scene, hw: &HwConfig) -> Result<Plan> {
     let host = front_end(scene, &guard);
     let host_ms = ms_since(t);
     let grid = Grid::new(hw.raster.samples, hw.subpixel_bits(), width, height);
-    // The filter's apron: a pixel's window reaches `base / 2 + 1` pixels beyond a sample.
-    let apron = hw.accumulate.filter.base() as i64 / 2 + 1;
-    let prints: Vec<input::Footprint> = host
-        .prims
-        .iter()
-        .map(|p| input::footprint(p, hw, apron))
-        .collect();
-    let boxes: Vec<[i64; 4]> = prints.iter().map(|f| f.pixels).collect();
-    let screen = Region {
-        x0: 0,
-        y0: 0,
-        x1: width,
-        y1: height,
-    };
-    let region = region_of(&boxes, &screen);
-    let kernel = Kernel::new(
-        hw.accumulate.filter,
-        grid.n,
-        hw.accumulate.weight_bits,
-        hw.accumulate.gaussian_sigma,
-    );
-    let samples = if region.is_empty() {
-        SampleRegion::default()
-    } else {
-        sample_region(&region, &kernel)
-    };
+    let prints = input::footprints(&host, hw);
+    let screen = Region::screen(width, height);
+    let kernel = kernel(hw);
+    let (region, samples) = regions(&prints, &kernel, width, height);
     let mut tiles = Tiles::new(hw.cycles.tile, width, height);
     for f in &prints {
-        let b = clamp(&f.pixels, &screen);
+        let b = Region::of_box(&f.pixels, &screen);
         match &f.triangle {
             // A triangle bins only to the tiles whose filter windows' samples it meets.
             Some(t) => {
@@ -184,35 +160,6 @@ fn sample_window(r: &Region, g: &Grid, k: &Kernel) -> [i64; 4] {
         centre(last(r.x1)),
         centre(last(r.y1)),
     ]
-}
-
-/// A pixel box `[x0, y0, x1, y1)` (unclamped) clamped to the screen.
-fn clamp(b: &[i64; 4], screen: &Region) -> Region {
-    let cx = |v: i64| v.clamp(0, screen.x1 as i64) as u32;
-    let cy = |v: i64| v.clamp(0, screen.y1 as i64) as u32;
-    Region {
-        x0: cx(b[0]),
-        y0: cy(b[1]),
-        x1: cx(b[2]),
-        y1: cy(b[3]),
-    }
-}
-
-/// The union of the primitives' pixel boxes, clipped to the screen (empty when none).
-fn region_of(boxes: &[[i64; 4]], screen: &Region) -> Region {
-    let Some(first) = boxes.first() else {
-        return Region::default();
-    };
-    let u = boxes.iter().fold(*first, |a, b| {
-        [
-            a[0].min(b[0]),
-            a[1].min(b[1]),
-            a[2].max(b[2]),
-            a[3].max(b[3]),
-        ]
-    });
-    let r = clamp(&u, screen);
-    if r.is_empty() { Region::default() } else { r }
 }
 
 /// The plan as the report shows it.
@@ -295,18 +242,18 @@ impl Plan {
     /// background samples where geometry was clipped away).
     pub fn notes(&self, hw: &HwConfig, opts: crate::stage::RunOptions) -> Vec<String> {
         let mut notes = Vec::new();
-        if opts.dof_reference && !self.layout.has(StageId::Dof) {
-            notes.push(
-                "--dof-reference has no effect: the plan has no dof stage (a pinhole camera)"
-                    .into(),
-            );
+        if !self.layout.has(StageId::Dof) {
+            let flags = [
+                (opts.dof_reference, "--dof-reference"),
+                (opts.dof_truth_samples > 0, "--dof-truth"),
+            ];
+            for (_, flag) in flags.iter().filter(|(on, _)| *on) {
+                notes.push(format!(
+                    "{flag} has no effect: the plan has no dof stage (a pinhole camera)"
+                ));
+            }
         }
-        let k = Kernel::new(
-            hw.accumulate.filter,
-            hw.raster.samples,
-            hw.accumulate.weight_bits,
-            hw.accumulate.gaussian_sigma,
-        );
+        let k = kernel(hw);
         let n = k.n as i64;
         let reach = k.off.max(k.size as i64 - n - k.off);
         let reach_px = (reach + n - 1) / n;

@@ -89,6 +89,9 @@ pub struct Report {
     pub cycles: CycleReport,
     /// Visible contours through the display model (see [`crate::perceptual`]).
     pub contours: ContourReport,
+    /// The errors against the depth-of-field truth (`render --dof-truth`, a thin lens only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dof_truth: Option<crate::truth::TruthReport>,
 }
 
 /// The ideal image the contour metric reads (from the float frame before the gamma stage
@@ -234,6 +237,7 @@ pub(super) fn build(
         timing,
         cycles,
         contours: contours.report,
+        dof_truth: None,
     };
     (report, workload, contours.map)
 }

@@ -1,8 +1,9 @@
-//! Camera, culling, clipping and projection: [`front_end`].
+//! Camera, culling, clipping and projection: [`front_end`], and the same seen through one
+//! point of a thin lens's aperture ([`front_end_through`]).
 
 use super::shade::shade_vertex;
 use super::tessellate::tessellate;
-use super::vec3::{V3, cross, dot, lerp3, normalize, scale, sub};
+use super::vec3::{V3, add, cross, dot, lerp3, normalize, scale, sub};
 use super::{
     Camera, FrontEndStats, GuardBand, HostScene, Material, Object, Primitive, Scene, ScreenVertex,
     Space,
@@ -17,12 +18,31 @@ pub fn screen_z(camera: &Camera, depth: f64) -> f64 {
 /// View-space depth of a screen depth z: the inverse of [`screen_z`],
 /// `d = 1 / (1/near - z·(1/near - 1/far))`.
 pub fn depth_from_screen_z(camera: &Camera, z: f64) -> f64 {
-    let (n, f) = (camera.near, camera.far);
-    1.0 / (1.0 / n - z * (1.0 / n - 1.0 / f))
+    d_of(camera.near, camera.far, z)
+}
+
+fn d_of(near: f64, far: f64, z: f64) -> f64 {
+    1.0 / (1.0 / near - z * (1.0 / near - 1.0 / far))
 }
 
 fn z_of(near: f64, far: f64, d: f64) -> f64 {
     (1.0 / near - 1.0 / d) / (1.0 / near - 1.0 / far)
+}
+
+/// One point of a thin lens's aperture, for a physically based depth of field by
+/// accumulation over the lens: the eye (camera position and look-at point together) moves by
+/// `a` along the camera's right axis and `b` along its up axis, and the image is sheared so
+/// that the plane at distance `focus` stays where the pinhole camera puts it. A point at
+/// view depth `d` then moves by `f_px (a, -b) (1/focus - 1/d)` pixels (screen y points down;
+/// `f_px = H / (2 tan(fov/2))`), zero on the focus plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LensPoint {
+    /// Offset along the camera's right axis, scene units.
+    pub a: f64,
+    /// Offset along the camera's up axis, scene units.
+    pub b: f64,
+    /// Distance of the plane that stays fixed (the focus distance), scene units, > 0.
+    pub focus: f64,
 }
 
 /// The look-at camera as a view transform plus a perspective projection to pixels.
@@ -37,25 +57,53 @@ struct View {
     cy: f64,
     near: f64,
     far: f64,
+    /// The lens point the view is seen through (`None`: the pinhole).
+    lens: Option<LensPoint>,
 }
 
 impl View {
-    fn new(camera: &Camera, width: u32, height: u32) -> Self {
+    fn new(camera: &Camera, width: u32, height: u32, lens: Option<LensPoint>) -> Self {
         let forward = normalize(sub(camera.look_at, camera.position));
         let right = normalize(cross(forward, camera.up));
         let up = cross(right, forward);
         let half = (camera.fov_y_deg.to_radians() * 0.5).tan();
+        let focal_px = f64::from(height) * 0.5 / half;
+        let (mut eye, mut cx, mut cy) = (
+            camera.position,
+            f64::from(width) * 0.5,
+            f64::from(height) * 0.5,
+        );
+        if let Some(l) = lens {
+            // The shear keeps the focus plane fixed: a point there moves by -f a / U with
+            // the eye (x) and back by +f a / U here; likewise for y, which points down.
+            eye = add(add(eye, scale(right, l.a)), scale(up, l.b));
+            cx += focal_px * l.a / l.focus;
+            cy -= focal_px * l.b / l.focus;
+        }
         Self {
-            eye: camera.position,
+            eye,
             right,
             up,
             forward,
-            focal_px: f64::from(height) * 0.5 / half,
-            cx: f64::from(width) * 0.5,
-            cy: f64::from(height) * 0.5,
+            focal_px,
+            cx,
+            cy,
             near: camera.near,
             far: camera.far,
+            lens,
         }
+    }
+
+    /// A screen-space vertex (x, y in pixels, z screen depth) as seen through the lens
+    /// point: moved by the parallax of its depth, `f_px (a, -b) (1/focus - 1/d)`.
+    fn screen_vertex(&self, p: V3, i: f64) -> ScreenVertex {
+        let mut v = sv(p, i);
+        if let Some(l) = self.lens {
+            let k = self.focal_px * (1.0 / l.focus - 1.0 / d_of(self.near, self.far, v.z));
+            v.x += k * l.a;
+            v.y -= k * l.b;
+        }
+        v
     }
 
     /// World -> view space `(x right, y up, d forward)`.
@@ -242,7 +290,10 @@ impl Out<'_> {
 
     fn line(&mut self, space: Space, from: V3, to: V3, intensity: f64, width: f64) {
         let (a, b) = match space {
-            Space::Screen => (sv(from, intensity), sv(to, intensity)),
+            Space::Screen => (
+                self.view.screen_vertex(from, intensity),
+                self.view.screen_vertex(to, intensity),
+            ),
             Space::World => {
                 let (mut a, mut b) = (self.view.to_view(from), self.view.to_view(to));
                 let (near, far) = (self.view.near, self.view.far);
@@ -309,7 +360,7 @@ impl Out<'_> {
 
     fn point(&mut self, space: Space, position: V3, intensity: f64, size: f64) {
         let v = match space {
-            Space::Screen => sv(position, intensity),
+            Space::Screen => self.view.screen_vertex(position, intensity),
             Space::World => {
                 let p = self.view.to_view(position);
                 if !(p[2] >= self.view.near && p[2] <= self.view.far) {
@@ -349,8 +400,17 @@ fn front_facing(p: [V3; 3], eye: V3) -> bool {
 /// Lines are clipped to near, far and the guard band; light points are kept only when their
 /// centre lies within near..far and inside the guard band.
 pub fn front_end(scene: &Scene, guard: &GuardBand) -> HostScene {
-    let view = View::new(&scene.camera, scene.image.width, scene.image.height);
-    let eye = scene.camera.position;
+    front_end_through(scene, guard, None)
+}
+
+/// [`front_end`] seen through one point of a thin lens's aperture ([`LensPoint`]; `None`:
+/// the pinhole, exactly [`front_end`]): the eye moved on the lens, every world object
+/// culled and shaded from the moved eye, projected and sheared so the focus plane stays
+/// fixed, and screen-space objects moved by the parallax of their depth. The guard-band clip
+/// comes after the shear, so every view is clipped in its own screen.
+pub fn front_end_through(scene: &Scene, guard: &GuardBand, lens: Option<LensPoint>) -> HostScene {
+    let view = View::new(&scene.camera, scene.image.width, scene.image.height, lens);
+    let eye = view.eye;
     let ambient = scene.shading.ambient;
     let lights = &scene.lights;
     let shade = |p: V3, n: V3, m: &Material| shade_vertex(p, n, eye, m, ambient, lights);
@@ -463,7 +523,8 @@ fn raw_triangle(
     match space {
         Space::Screen => {
             let i = intensity.unwrap_or([0.0; 3]);
-            out.screen_polygon((0..3).map(|k| sv(v[k], i[k])).collect());
+            let poly = (0..3).map(|k| out.view.screen_vertex(v[k], i[k])).collect();
+            out.screen_polygon(poly);
         }
         Space::World => {
             let i = intensity.unwrap_or_else(|| {

@@ -39,6 +39,11 @@ pub struct RunOptions {
     /// machine's memory). Not part of any stage's key.
     #[serde(skip)]
     pub max_memory: Option<u64>,
+    /// Also compute the depth-of-field truth by averaging this many lens points (0: off;
+    /// see `crate::truth`). Not a stage and not part of any stage's key: the truth frame
+    /// is memoised under its own key.
+    #[serde(skip)]
+    pub dof_truth_samples: u32,
 }
 
 impl Default for RunOptions {
@@ -47,6 +52,7 @@ impl Default for RunOptions {
             stage_local: true,
             dof_reference: false,
             max_memory: None,
+            dof_truth_samples: 0,
         }
     }
 }
@@ -57,6 +63,7 @@ impl RunOptions {
         stage_local: false,
         dof_reference: false,
         max_memory: None,
+        dof_truth_samples: 0,
     };
 }
 

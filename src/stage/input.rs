@@ -223,6 +223,15 @@ pub fn fprim(p: &Primitive, hw: &HwConfig) -> FPrim {
     }
 }
 
+/// The stage's float reference: every host primitive in the fixed formats' units and the
+/// background's intensity in intensity LSBs, unrounded.
+pub fn float_prims(host: &HostScene, hw: &HwConfig) -> PrimsF {
+    let f = host.prims.iter().map(|p| fprim(p, hw)).collect();
+    let i_fmt = hw.input.intensity.format;
+    let bg = host.background * white_i(hw) * (1u64 << i_fmt.frac_bits) as f64;
+    PrimsF { f, bg }
+}
+
 /// Where a host primitive can touch the screen, from its coordinates quantised with
 /// `input.coord` (exactly as the fixed model quantises them): the plan's region and tile
 /// bins come from it.
@@ -233,6 +242,13 @@ pub struct Footprint {
     pub pixels: [i64; 4],
     /// A triangle's quantised vertices (coordinate units), for an exact overlap test.
     pub triangle: Option<[(i64, i64); 3]>,
+}
+
+/// The [`Footprint`]s of the host's primitives with the configured filter's apron (a
+/// pixel's window reaches `base / 2 + 1` pixels beyond a sample).
+pub fn footprints(host: &HostScene, hw: &HwConfig) -> Vec<Footprint> {
+    let apron = hw.accumulate.filter.base() as i64 / 2 + 1;
+    host.prims.iter().map(|p| footprint(p, hw, apron)).collect()
 }
 
 /// The [`Footprint`] of a host primitive with a filter reaching `apron` pixels beyond a
@@ -343,11 +359,7 @@ impl Stage for Input {
     }
 
     fn float(&self, cx: &Cx, _: &Self::Fixed, taps: &mut Taps, _: &mut Notes) -> Result<()> {
-        let host = taps.host();
-        let f = host.prims.iter().map(|p| fprim(p, cx.hw)).collect();
-        let i_fmt = cx.hw.input.intensity.format;
-        let bg = host.background * white_i(cx.hw) * (1u64 << i_fmt.frac_bits) as f64;
-        taps.float.prims = Some(Arc::new(PrimsF { f, bg }));
+        taps.float.prims = Some(Arc::new(float_prims(taps.host(), cx.hw)));
         Ok(())
     }
 

@@ -81,6 +81,43 @@ impl Region {
             (self.x1 - self.x0) as u64 * (self.y1 - self.y0) as u64
         }
     }
+    /// The whole `width x height` screen.
+    pub fn screen(width: u32, height: u32) -> Region {
+        Region {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+    /// A pixel box `[x0, y0, x1, y1)` (unclamped) clamped to `screen` (whose origin is 0).
+    pub fn of_box(b: &[i64; 4], screen: &Region) -> Region {
+        let cx = |v: i64| v.clamp(0, screen.x1 as i64) as u32;
+        let cy = |v: i64| v.clamp(0, screen.y1 as i64) as u32;
+        Region {
+            x0: cx(b[0]),
+            y0: cy(b[1]),
+            x1: cx(b[2]),
+            y1: cy(b[3]),
+        }
+    }
+    /// The union of pixel boxes (primitives' footprints), clipped to `screen` (empty when
+    /// there is none or it lies off the screen).
+    pub fn bounding(boxes: &[[i64; 4]], screen: &Region) -> Region {
+        let Some(first) = boxes.first() else {
+            return Region::default();
+        };
+        let u = boxes.iter().fold(*first, |a, b| {
+            [
+                a[0].min(b[0]),
+                a[1].min(b[1]),
+                a[2].max(b[2]),
+                a[3].max(b[3]),
+            ]
+        });
+        let r = Region::of_box(&u, screen);
+        if r.is_empty() { Region::default() } else { r }
+    }
     /// The intersection with `b` (empty when they do not meet).
     pub fn clip(&self, b: &Region) -> Region {
         let r = Region {

@@ -74,6 +74,37 @@ impl SamplesF {
     }
 }
 
+/// The stage's float reference: the float fragments resolved into a float sample buffer
+/// over `reg` (surfaces in primitive order), then the light points' visible samples.
+pub fn float_samples(
+    prims: &super::taps::PrimsF,
+    frags: &super::taps::Frags<FragF>,
+    reg: SampleRegion,
+) -> SampleTapF {
+    let mut buf = SamplesF::new(reg, prims.bg);
+    for (p, f) in prims.f.iter().enumerate() {
+        if !f.is_point() {
+            resolve_f64(frags.of(p), p as u32 + 1, &mut buf);
+        }
+    }
+    let mut points = Vec::new();
+    for (p, f) in prims.f.iter().enumerate() {
+        let super::raster::FPrim::Point { v, .. } = f else {
+            continue;
+        };
+        let vis = point_visible_f64(frags.of(p), &buf);
+        points.push(PointFrags {
+            i: v.i,
+            samples: vis.into_iter().map(|v| v.0).collect(),
+        });
+    }
+    SampleTapF {
+        samples: buf,
+        points,
+        bg: prims.bg,
+    }
+}
+
 /// Depth conversion from the interpolated format to the z-buffer format.
 #[derive(Clone, Copy, Debug)]
 pub struct ZConvert {
@@ -303,31 +334,8 @@ impl Stage for Visibility {
     }
 
     fn float(&self, cx: &Cx, _: &Vec<u64>, taps: &mut Taps, _: &mut Notes) -> Result<()> {
-        let prims = taps.float.prims();
-        let frags = taps.float.frags();
-        let mut buf = SamplesF::new(cx.layout.samples, prims.bg);
-        for (p, f) in prims.f.iter().enumerate() {
-            if !f.is_point() {
-                resolve_f64(frags.of(p), p as u32 + 1, &mut buf);
-            }
-        }
-        let mut points = Vec::new();
-        for (p, f) in prims.f.iter().enumerate() {
-            let super::raster::FPrim::Point { v, .. } = f else {
-                continue;
-            };
-            let vis = point_visible_f64(frags.of(p), &buf);
-            points.push(PointFrags {
-                i: v.i,
-                samples: vis.into_iter().map(|v| v.0).collect(),
-            });
-        }
-        let bg = prims.bg;
-        taps.float.samples = Some(Arc::new(SampleTapF {
-            samples: buf,
-            points,
-            bg,
-        }));
+        let s = float_samples(taps.float.prims(), taps.float.frags(), cx.layout.samples);
+        taps.float.samples = Some(Arc::new(s));
         Ok(())
     }
 

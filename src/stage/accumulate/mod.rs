@@ -30,5 +30,5 @@ pub use cost::{FRAME_MEMORY, WEIGHT_ROM, cost};
 pub use fixed::{AccParams, AccWork, Frame, accumulate, accumulate_tiles, own_depth_coverage};
 pub use float::{AccRef, accumulate_f64};
 pub use kernel::Kernel;
-pub use points::{PointFrags, point_weights, sample_region};
-pub use stage::{Accumulate, kernel};
+pub use points::{PointFrags, point_weights, regions, sample_region};
+pub use stage::{Accumulate, float_frame, kernel};

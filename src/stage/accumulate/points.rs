@@ -29,6 +29,24 @@ pub fn sample_region(r: &Region, k: &Kernel) -> SampleRegion {
     }
 }
 
+/// The pixel region the primitives' footprints touch on a `width x height` screen (their
+/// union, clipped to it; empty when none) and the sample region its filter windows read.
+pub fn regions(
+    prints: &[crate::stage::input::Footprint],
+    k: &Kernel,
+    width: u32,
+    height: u32,
+) -> (Region, SampleRegion) {
+    let boxes: Vec<[i64; 4]> = prints.iter().map(|f| f.pixels).collect();
+    let region = Region::bounding(&boxes, &Region::screen(width, height));
+    let samples = if region.is_empty() {
+        SampleRegion::default()
+    } else {
+        sample_region(&region, k)
+    };
+    (region, samples)
+}
+
 /// For a light point: each pixel of the region it touches with the summed filter weight
 /// `S` of its visible samples (`weight(e)` gives the kernel entry `e`).
 pub fn point_weights(

@@ -14,10 +14,11 @@ use crate::scene::Scene;
 use crate::stage::logdomain::{
     LogAdder, LogCode, LogWork, accumulate_pixel, accumulate_pixel_f64, add_term, local_add,
 };
-use crate::stage::taps::{FrameCoding, FrameTap, SampleCoding, SampleTap, Taps};
+use crate::stage::taps::{FrameCoding, FrameTap, SampleCoding, SampleTap, SampleTapF, Taps};
 use crate::stage::visibility::Samples;
 use crate::stage::{
-    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, TokenKind, Tokens,
+    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Region, Stage, StageId, TokenKind,
+    Tokens,
 };
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -30,6 +31,27 @@ pub fn kernel(hw: &HwConfig) -> Kernel {
         hw.accumulate.weight_bits,
         hw.accumulate.gaussian_sigma,
     )
+}
+
+/// The stage's float reference: the float sample buffer filtered with the kernel's exact
+/// weights over the pixel `region` of a `size` screen (the rest is the background), in
+/// frame LSBs, unrounded and unsaturated. The buffer covers the samples the region's filter
+/// windows read.
+pub fn float_frame(
+    s: &SampleTapF,
+    kernel: &Kernel,
+    hw: &HwConfig,
+    size: (u32, u32),
+    region: &Region,
+) -> Vec<f64> {
+    let r = AccRef {
+        kernel,
+        i_frac: hw.input.intensity.format.frac_bits,
+        frame_frac: hw.accumulate.frame.format.frac_bits,
+        bg_i: s.bg,
+        size,
+    };
+    accumulate_f64(&s.samples.i, &s.samples.reg, region, &s.points, &r)
 }
 
 /// What the fixed model leaves: the kernel, its frame writes per binned tile and, for
@@ -138,16 +160,9 @@ impl Stage for Accumulate {
     }
 
     fn float(&self, cx: &Cx, a: &Accumulated, taps: &mut Taps, _: &mut Notes) -> Result<()> {
-        let s = taps.float.samples();
         let l = cx.layout;
-        let r = AccRef {
-            kernel: &a.kernel,
-            i_frac: cx.hw.input.intensity.format.frac_bits,
-            frame_frac: cx.hw.accumulate.frame.format.frac_bits,
-            bg_i: s.bg,
-            size: (l.grid.width, l.grid.height),
-        };
-        let frame_ref = accumulate_f64(&s.samples.i, &l.samples, &l.region, &s.points, &r);
+        let size = (l.grid.width, l.grid.height);
+        let frame_ref = float_frame(taps.float.samples(), &a.kernel, cx.hw, size, &l.region);
         taps.float.frame = Some(Arc::new(frame_ref));
         Ok(())
     }

@@ -57,6 +57,25 @@ pub fn params(cx: &Cx) -> RasterParams {
     }
 }
 
+/// The stage's float reference: every float primitive's covered samples of `reg`, in
+/// primitive order (`capacity`: the fragments to reserve room for).
+pub fn float_frags(
+    prims: &[FPrim],
+    grid: &super::Grid,
+    reg: &SampleRegion,
+    capacity: usize,
+) -> Frags<FragF> {
+    let mut out = Frags {
+        data: Vec::with_capacity(capacity),
+        start: vec![0],
+    };
+    for p in prims {
+        raster_f64(p, grid, reg, &mut out.data);
+        out.start.push(out.data.len());
+    }
+    out
+}
+
 /// Merges two fragment lists sorted by sample index: coverage mismatches and attribute errors.
 fn compare_frags(fx: &[Frag], fl: &[FragF], i_err: &mut LocalError, z_err: &mut LocalError) {
     let (mut a, mut b) = (0, 0);
@@ -141,14 +160,8 @@ impl Stage for Raster {
     fn float(&self, cx: &Cx, _: &Vec<u64>, taps: &mut Taps, _: &mut Notes) -> Result<()> {
         let (grid, reg) = (cx.layout.grid, cx.layout.samples);
         // About as many fragments as the fixed raster emitted.
-        let mut out = Frags {
-            data: Vec::with_capacity(taps.fixed.frags.as_ref().map_or(0, |f| f.data.len())),
-            start: vec![0],
-        };
-        for p in &taps.float.prims().f {
-            raster_f64(p, &grid, &reg, &mut out.data);
-            out.start.push(out.data.len());
-        }
+        let capacity = taps.fixed.frags.as_ref().map_or(0, |f| f.data.len());
+        let out = float_frags(&taps.float.prims().f, &grid, &reg, capacity);
         taps.float.frags = Some(Arc::new(out));
         Ok(())
     }
