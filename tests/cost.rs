@@ -71,7 +71,11 @@ fn cases() -> &'static [Case] {
                 "default thin lens linear12",
                 Scene::default_scene(),
                 HwConfig::default_config(),
-                with(&[(Dof, "dof coefficient ROM"), (Gamma, "gamma ROM")]),
+                with(&[
+                    (Dof, "dof coefficient ROM"),
+                    (Dof, "dof sigma ROM"),
+                    (Gamma, "gamma ROM"),
+                ]),
             ),
             (
                 "pinhole log8-logadd",
@@ -437,14 +441,15 @@ fn rom_out_matches(scene: &str, hw_arg: &str, r: &Render, tag: &str) -> BTreeSet
 
 #[test]
 fn rom_out_writes_the_images_of_the_library_render() {
-    // The default plan: gamma ROM, frame memory, filter weights, dof coefficients; the
-    // sample buffer is over the size limit and listed only.
+    // The default plan: gamma ROM, frame memory, filter weights, dof coefficients and the
+    // sigma ROM; the sample buffer is over the size limit and listed only.
     let written = rom_out_matches("default", "linear12", &cases()[0].render, "default");
     for name in [
         "gamma ROM",
         "frame memory",
         "filter weight ROM",
         "dof coefficient ROM",
+        "dof sigma ROM",
     ] {
         assert!(written.contains(name), "{written:?}");
     }

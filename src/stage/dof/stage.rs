@@ -137,6 +137,8 @@ impl Stage for Dof {
             &cx.scene.camera,
             frame.height,
             hw.visibility.z.format.frac_bits,
+            hw.dof.sigma,
+            hw.dof.sigma_rom_bits,
         )
         .expect("the plan runs dof for a thin lens only");
         let (plan, out, mut facts) = match hw.dof.kind {
@@ -159,7 +161,7 @@ impl Stage for Dof {
                 in_focus += 1;
             }
         }
-        facts.note("lens", lens);
+        facts.note("lens", &lens);
         facts.note(
             "object_sigma_px",
             serde_json::json!({"min": sig_min, "max": sig_max, "background": lens.sigma_f64(u32::MAX)}),
