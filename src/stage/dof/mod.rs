@@ -85,7 +85,8 @@
 //! `method` (the interface of the methods behind `dof.kind`), `layered` (the layered method
 //! through it), `layers` (the layer plan), `fixed` (the fixed datapath, `row_mac`), `float`
 //! (the layered float reference), `reference` (per-pixel scatter, theorem form, error split,
-//! depth-edge bands), `cost` (cost, memories, signals), `stage` (the stage contract).
+//! depth-edge bands), `potentiate` (a log-coded frame made linear for DoF), `cost` (cost,
+//! memories, signals), `stage` (the stage contract).
 
 mod cost;
 mod fixed;
@@ -95,6 +96,7 @@ mod layers;
 mod lens;
 mod mask;
 mod method;
+mod potentiate;
 mod reference;
 mod stage;
 
@@ -110,6 +112,7 @@ pub use layers::{DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layer
 pub use lens::{G_FRAC, LensMap, SIGMA_FRAC};
 pub use mask::{difference_degree, half_size, mask_difference, taps_f64, taps_fixed};
 pub use method::Method;
+pub use potentiate::{FramePotentiation, POT_LUT};
 pub use reference::{
     RegionError, additive_layered, depth_edge_band, edge_band, local_error, per_pixel_scatter,
     region_error, weber_linear,
