@@ -359,6 +359,7 @@ fn stage_reuse_gives_the_rows_of_full_renders() {
             cache: c,
             flicker: None,
             max_memory: None,
+            dof_truth: None,
         };
         sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).unwrap();
         outs.push(rows(&out));
@@ -455,6 +456,7 @@ fn reuse_rows(name: &str, scene: &igemu::scene::Scene, grid: &str) -> Vec<sweep:
         cache: Some(&cache),
         flicker: None,
         max_memory: None,
+        dof_truth: None,
     };
     sweep::run(&configs, std::slice::from_ref(scene), &opts, &|_, _| {})
         .unwrap()
@@ -528,6 +530,7 @@ fn run_lib(
         cache: None,
         flicker: None,
         max_memory: None,
+        dof_truth: None,
     };
     sweep::run(configs, scenes, &opts, &|_, _| {}).unwrap()
 }

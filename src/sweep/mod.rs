@@ -127,6 +127,75 @@ impl FlickerMetrics {
     }
 }
 
+/// One error against the depth-of-field truth over one set of pixels (see
+/// [`crate::truth::Diff`]).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct TruthError {
+    /// Mean |difference|, DAC codes.
+    pub mean_code_diff: f64,
+    /// RMS difference, DAC codes.
+    pub rms_code_diff: f64,
+    /// Largest |difference|, DAC codes.
+    pub max_code_diff: u32,
+    /// Mean Weber fraction through the display model.
+    pub weber_mean: f64,
+    /// Fraction of pixels whose Weber fraction exceeds the visibility threshold.
+    pub weber_visible_fraction: f64,
+}
+
+impl TruthError {
+    fn of(d: &crate::truth::Diff) -> Self {
+        Self {
+            mean_code_diff: d.mean_abs,
+            rms_code_diff: d.rms,
+            max_code_diff: d.max_abs,
+            weber_mean: d.weber_mean,
+            weber_visible_fraction: d.weber_visible_fraction,
+        }
+    }
+
+    fn split(s: &crate::truth::Split<crate::truth::Diff>) -> crate::truth::Split<Self> {
+        crate::truth::Split {
+            whole: Self::of(&s.whole),
+            edge: Self::of(&s.edge),
+            interior: Self::of(&s.interior),
+        }
+    }
+}
+
+/// The errors of a row against the depth-of-field truth (`--dof-truth`, a thin-lens scene
+/// only; see [`crate::truth`]): the axes `truth_total`, `truth_algorithm` and
+/// `truth_quantisation` read the whole image's mean Weber fraction.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct TruthMetrics {
+    /// Lens points the truth averages.
+    pub lens_samples: u32,
+    /// The truth's noise: RMS over the pixels of its standard error, DAC codes.
+    pub noise_dac_rms: f64,
+    /// Pixels of the depth-edge band.
+    pub edge_pixels: u64,
+    /// Fixed pipeline vs truth.
+    pub total: crate::truth::Split<TruthError>,
+    /// Float reference pipeline vs truth (the method's approximation).
+    pub algorithm: crate::truth::Split<TruthError>,
+    /// Fixed vs float reference (the quantisation).
+    pub quantisation: crate::truth::Split<TruthError>,
+}
+
+impl TruthMetrics {
+    /// The row's metrics from a render's truth report.
+    pub fn of(t: &crate::truth::TruthReport) -> Self {
+        Self {
+            lens_samples: t.lens_samples,
+            noise_dac_rms: t.noise.dac.whole.rms,
+            edge_pixels: t.edge_pixels,
+            total: TruthError::split(&t.total),
+            algorithm: TruthError::split(&t.algorithm),
+            quantisation: TruthError::split(&t.quantisation),
+        }
+    }
+}
+
 /// Wall time of a row (the only field that differs between runs).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct RowTiming {
@@ -155,8 +224,12 @@ pub struct Row {
     /// Small-object flicker (only with `--flicker`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flicker: Option<FlickerMetrics>,
-    /// Stages whose result was reused from an earlier row of the run (run state, like the
-    /// timing: excluded when rows are compared).
+    /// Errors against the depth-of-field truth (only with `--dof-truth`, on a thin-lens
+    /// scene).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth: Option<TruthMetrics>,
+    /// Stages whose result was reused from an earlier row of the run, and `dof truth` when
+    /// the truth frame was (run state, like the timing: excluded when rows are compared).
     #[serde(default)]
     pub reused: Vec<String>,
     /// Wall time (excluded when rows are compared).
@@ -275,10 +348,24 @@ fn run_job_as(
         flicker: flicker
             .map(|n| FlickerMetrics::of(&cfg.hw, n))
             .transpose()?,
-        reused: rep.reused.clone(),
+        truth: rep.dof_truth.as_ref().map(TruthMetrics::of),
+        reused: rep
+            .reused
+            .iter()
+            .cloned()
+            .chain(
+                rep.dof_truth
+                    .as_ref()
+                    .filter(|t| t.reused)
+                    .map(|_| TRUTH_REUSED.to_string()),
+            )
+            .collect(),
         timing: RowTiming { render_ms },
     })
 }
+
+/// The entry of [`Row::reused`] for a truth frame taken from the cache.
+pub const TRUTH_REUSED: &str = "dof truth";
 
 /// Options of a sweep run.
 pub struct SweepOptions<'a> {
@@ -296,6 +383,9 @@ pub struct SweepOptions<'a> {
     pub flicker: Option<u32>,
     /// The memory limit of each render (`None`: half the machine's memory).
     pub max_memory: Option<u64>,
+    /// Compare every row with the depth-of-field truth at this many lens points (computed
+    /// once per scene when `cache` is given; part of the row ids).
+    pub dof_truth: Option<u32>,
 }
 
 /// Summary of a run.
@@ -326,7 +416,10 @@ pub fn run(
     let range = opts.shard.map_or(0..all.len(), |s| s.range(all.len()));
     let mine = &all[range];
     let scene_keys: Vec<u64> = scenes.iter().map(scene_key).collect();
-    let hw_keys: Vec<u64> = configs.iter().map(|c| hardware_key(&c.hw)).collect();
+    let hw_keys: Vec<u64> = configs
+        .iter()
+        .map(|c| rows::with_truth(hardware_key(&c.hw), opts.dof_truth))
+        .collect();
     let ids: Vec<String> = mine
         .iter()
         .map(|j| row_id_from_keys(scene_keys[j.scene], hw_keys[j.config]))
@@ -367,6 +460,7 @@ pub fn run(
             opts.flicker,
             RunOptions {
                 max_memory: opts.max_memory,
+                dof_truth_samples: opts.dof_truth.unwrap_or(0),
                 ..RunOptions::FAST
             },
         )?;

@@ -22,6 +22,14 @@ pub enum Axis {
     Throughput,
     /// Largest displayed ripple of a small moving object, % (minimised; needs `--flicker`).
     Flicker,
+    /// Mean Weber error of the fixed pipeline against the depth-of-field truth (minimised;
+    /// needs `--dof-truth`).
+    TruthTotal,
+    /// Mean Weber error of the float reference pipeline against the truth: the method's.
+    TruthAlgorithm,
+    /// Mean Weber error of the fixed pipeline against the float reference, from the truth's
+    /// split (the same images as `error`).
+    TruthQuantisation,
 }
 
 /// Axis names accepted by `--axes`.
@@ -34,6 +42,9 @@ pub const AXES: &[&str] = &[
     "cost",
     "throughput",
     "flicker",
+    "truth_total",
+    "truth_algorithm",
+    "truth_quantisation",
 ];
 
 impl Axis {
@@ -48,6 +59,9 @@ impl Axis {
             "cost" => Axis::Cost,
             "throughput" | "fps" => Axis::Throughput,
             "flicker" => Axis::Flicker,
+            "truth_total" => Axis::TruthTotal,
+            "truth_algorithm" => Axis::TruthAlgorithm,
+            "truth_quantisation" => Axis::TruthQuantisation,
             other => {
                 return Err(format!(
                     "unknown axis `{other}`; allowed: {}",
@@ -84,6 +98,9 @@ impl Axis {
             Axis::Cost => "storage + LUT bits",
             Axis::Throughput => "frames/s",
             Axis::Flicker => "displayed flicker ripple %",
+            Axis::TruthTotal => "Weber vs truth",
+            Axis::TruthAlgorithm => "float Weber vs truth",
+            Axis::TruthQuantisation => "Weber fixed vs float",
         }
     }
 
@@ -101,7 +118,18 @@ impl Axis {
                 .flicker
                 .as_ref()
                 .map_or(f64::INFINITY, |f| f.displayed_ripple_pct),
+            Axis::TruthTotal => truth(r, |t| t.total.whole.weber_mean),
+            Axis::TruthAlgorithm => truth(r, |t| t.algorithm.whole.weber_mean),
+            Axis::TruthQuantisation => truth(r, |t| t.quantisation.whole.weber_mean),
         }
+    }
+
+    /// Whether the axis reads the depth-of-field truth (`--dof-truth`).
+    pub fn needs_truth(self) -> bool {
+        matches!(
+            self,
+            Axis::TruthTotal | Axis::TruthAlgorithm | Axis::TruthQuantisation
+        )
     }
 
     /// The row's value as shown (throughput positive).
@@ -111,6 +139,12 @@ impl Axis {
             _ => self.key(r),
         }
     }
+}
+
+/// A truth metric of a row; a row without the truth (a pinhole scene, or no `--dof-truth`)
+/// is worst.
+fn truth(r: &Row, f: impl Fn(&super::TruthMetrics) -> f64) -> f64 {
+    r.truth.as_ref().map_or(f64::INFINITY, f)
 }
 
 /// Whether `a` dominates `b`: no worse on every axis and better on one.

@@ -10,6 +10,8 @@
 //!   without its `name` ([`hardware_key`]): two grids spelling the same hardware
 //!   differently (`preset = ["linear12"]` or not, the order of the axes) give the same key,
 //!   and a preset whose defaults change in a new version gives a new one;
+//!   with `--dof-truth` the lens-sample count is mixed into it ([`with_truth`]), so rows
+//!   with and without the truth, or with another count, are not mixed by `--resume`;
 //! * the **version** is the tool's (`CARGO_PKG_VERSION`): rows of another version are
 //!   recomputed.
 
@@ -52,6 +54,19 @@ pub fn hardware_key(hw: &HwConfig) -> u64 {
         }
     };
     fnv1a(text.as_bytes())
+}
+
+/// A [`hardware_key`] with the depth-of-field truth's lens-sample count mixed in (`None`:
+/// unchanged).
+pub fn with_truth(hardware_key: u64, lens_samples: Option<u32>) -> u64 {
+    match lens_samples {
+        None => hardware_key,
+        Some(n) => Fnv::new()
+            .u64(hardware_key)
+            .str("dof truth")
+            .u64(u64::from(n))
+            .finish(),
+    }
 }
 
 /// The row id from a [`scene_key`] and a [`hardware_key`] (16 hex digits).

@@ -9,7 +9,7 @@ use crate::stage::accumulate::Frame;
 use crate::stage::dof::{LensMap, depth_edge_band, half_size};
 use crate::stage::gamma::{GammaSpec, apply_powers, powers};
 use crate::stage::weber_of;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// DAC-code differences of an image against a reference over a set of pixels.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -35,7 +35,7 @@ pub struct Diff {
 }
 
 /// A measure over the whole image, the depth-edge band and the interior.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Split<T> {
     /// Every pixel.
     pub whole: T,

@@ -55,7 +55,7 @@ pub const MIN_SAMPLES: u32 = GROUPS;
 pub const MAX_SAMPLES: u32 = 4096;
 
 /// The lens samples of `render --dof-truth` without `--lens-samples`.
-pub const DEFAULT_SAMPLES: u32 = 64;
+pub const DEFAULT_SAMPLES: u32 = 256;
 
 /// Checks a lens-sample count: a multiple of [`GROUPS`] in
 /// [`MIN_SAMPLES`]`..=`[`MAX_SAMPLES`]; the message names the range (the caller names the

@@ -53,6 +53,42 @@ impl SceneArgs {
     }
 }
 
+/// The depth-of-field truth flags of `render` and `sweep` (see [`igemu::truth`]).
+#[derive(Args)]
+pub struct TruthArgs {
+    /// Compare with the depth-of-field truth: a thin-lens image averaged over points of the aperture, in f64 (a thin-lens scene only); reports the total, algorithm and quantisation errors and the truth's noise.
+    #[arg(long)]
+    pub dof_truth: bool,
+    /// Lens points the truth averages: a multiple of 8 in 8..=4096 (default 256); the noise falls as 1/sqrt(N), the time grows as N.
+    #[arg(long, value_name = "N", requires = "dof_truth", value_parser = parse_lens_samples)]
+    pub lens_samples: Option<u32>,
+}
+
+impl TruthArgs {
+    /// The lens-sample count of `RunOptions::dof_truth_samples` (0: no truth).
+    pub fn samples(&self) -> u32 {
+        if self.dof_truth {
+            self.lens_samples.unwrap_or(igemu::truth::DEFAULT_SAMPLES)
+        } else {
+            0
+        }
+    }
+}
+
+/// Parses `--lens-samples`: a number checked by [`igemu::truth::check_samples`].
+pub fn parse_lens_samples(s: &str) -> Result<u32, String> {
+    let n: u32 = s.trim().parse().map_err(|_| {
+        format!(
+            "`{s}` is not a count: give a multiple of {} in {}..={}",
+            igemu::truth::GROUPS,
+            igemu::truth::MIN_SAMPLES,
+            igemu::truth::MAX_SAMPLES
+        )
+    })?;
+    igemu::truth::check_samples(n)?;
+    Ok(n)
+}
+
 /// Parses a size: bytes, or a number with `K`, `M`, `G` or `T` (binary units; an optional
 /// `i` and `B` are accepted: `512M`, `8GiB`, `1.5G`).
 pub fn parse_size(s: &str) -> Result<u64, String> {

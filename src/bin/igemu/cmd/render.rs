@@ -3,7 +3,7 @@
 //! and the report (text, JSON on stdout or a JSON file). Every file is written atomically
 //! ([`igemu::output::AtomicFile`]); no output may be an input.
 
-use crate::args::{DumpTap, SceneArgs, arg_error, parse_dump};
+use crate::args::{DumpTap, SceneArgs, TruthArgs, arg_error, parse_dump};
 use crate::guard::{Inputs, distinct_outputs};
 use crate::out::outln;
 use crate::print::print_report;
@@ -48,6 +48,8 @@ pub struct RenderArgs {
     /// Also run the per-pixel depth-of-field reference (slow: O(N^2 M^2)) and the layer theorem check.
     #[arg(long)]
     pub dof_reference: bool,
+    #[command(flatten)]
+    pub truth: TruthArgs,
 }
 
 /// Runs `igemu render`; returns the exit code.
@@ -77,6 +79,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         a.s.opts(RunOptions {
             stage_local: !a.no_local,
             dof_reference: a.dof_reference,
+            dof_truth_samples: a.truth.samples(),
             ..RunOptions::default()
         }),
     )?;

@@ -1,7 +1,7 @@
 //! `igemu sweep`: render every configuration of a word-width grid on the scenes, one JSON
 //! line each (resumable, shardable, parallel), and print the Pareto front.
 
-use crate::args::{arg_error, load_scene};
+use crate::args::{TruthArgs, arg_error, load_scene};
 use crate::guard::Inputs;
 use crate::out::{out, outln};
 use clap::Args;
@@ -30,7 +30,7 @@ pub struct SweepArgs {
     /// Configurations rendered in parallel (1 = serial; results are identical).
     #[arg(long, default_value_t = 1)]
     pub jobs: usize,
-    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker).
+    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker), truth_total, truth_algorithm, truth_quantisation (mean Weber against the depth-of-field truth; need --dof-truth).
     #[arg(long, default_value = "error,cost")]
     pub axes: String,
     /// Run every phase for every configuration (no stage reuse between configurations).
@@ -45,6 +45,9 @@ pub struct SweepArgs {
     /// Refuse a render whose memory estimate exceeds SIZE (bytes, or with K, M, G, T; default half the machine's memory); with --jobs N, N renders run at once.
     #[arg(long, value_name = "SIZE", value_parser = crate::args::parse_size)]
     pub max_memory: Option<u64>,
+    /// Errors of every row against the depth-of-field truth (computed once per scene).
+    #[command(flatten)]
+    pub truth: TruthArgs,
 }
 
 /// Runs `igemu sweep`; returns the exit code.
@@ -88,6 +91,12 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
             "the flicker axis needs the flicker metrics: add --flicker PHASES".into(),
         ));
     }
+    if !a.truth.dof_truth && axes.iter().any(|x| x.needs_truth()) {
+        return Err(arg_error(
+            "--axes",
+            "the truth_* axes need the depth-of-field truth: add --dof-truth".into(),
+        ));
+    }
     let file = igemu::files::TomlFile::read(&a.grid)?;
     let configs = grid::Grid::parse(&file)?.expand(&file)?;
     let scenes: Vec<Scene> = if a.scenes.is_empty() {
@@ -120,6 +129,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         cache: if a.no_reuse { None } else { Some(&cache) },
         flicker: a.flicker,
         max_memory: a.max_memory,
+        dof_truth: a.truth.dof_truth.then(|| a.truth.samples()),
     };
     // Progress bar with ETA on a terminal (indicatif hides it when stderr is not a terminal).
     let bar = indicatif::ProgressBar::new(0);
