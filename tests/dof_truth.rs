@@ -72,8 +72,16 @@ fn a_lens_point_shears_a_point_at_depth_d_by_f_px_a_b_times_1_over_u_minus_1_ove
         for ((p, m), d) in pin.iter().zip(&moved).zip(depths) {
             let k = f_px * (1.0 / u - 1.0 / d);
             let (dx, dy) = (m.0 - p.0, m.1 - p.1);
-            assert!((dx - k * a).abs() < 1e-9, "a {a} b {b} D {d}: dx {dx} want {}", k * a);
-            assert!((dy + k * b).abs() < 1e-9, "a {a} b {b} D {d}: dy {dy} want {}", -k * b);
+            assert!(
+                (dx - k * a).abs() < 1e-9,
+                "a {a} b {b} D {d}: dx {dx} want {}",
+                k * a
+            );
+            assert!(
+                (dy + k * b).abs() < 1e-9,
+                "a {a} b {b} D {d}: dy {dy} want {}",
+                -k * b
+            );
             if d == u {
                 assert!(dx.abs() < 1e-9 && dy.abs() < 1e-9, "the focus plane moved");
             } else {
@@ -131,7 +139,10 @@ fn the_standard_error_falls_at_least_as_1_over_sqrt_n_and_predicts_the_actual_er
     assert!(s64 > 0.0 && s512 > 0.0, "a blurred scene has lens noise");
     // 1/sqrt(N) would give a ratio of 2 from N = 16 to 64; the stratified groups do better.
     assert!(s16 / s64 > 1.7, "se 16: {s16}, se 64: {s64}");
-    assert!(s64 / s512 > 1.7 * 2f64.sqrt(), "se 64: {s64}, se 512: {s512}");
+    assert!(
+        s64 / s512 > 1.7 * 2f64.sqrt(),
+        "se 64: {s64}, se 512: {s512}"
+    );
     // The estimate is honest: the actual RMS distance from the N = 512 truth (much less
     // noisy) is of the size the estimate claims.
     for (t, s) in [(&t16, s16), (&t64, s64)] {
@@ -165,8 +176,14 @@ fn the_split_is_consistent_total_is_algorithm_plus_quantisation() {
         },
     );
     for (q, (tot, alg)) in [
-        (&same.quantisation.whole, (&same.total.whole, &same.algorithm.whole)),
-        (&same.quantisation.edge, (&same.total.edge, &same.algorithm.edge)),
+        (
+            &same.quantisation.whole,
+            (&same.total.whole, &same.algorithm.whole),
+        ),
+        (
+            &same.quantisation.edge,
+            (&same.total.edge, &same.algorithm.edge),
+        ),
         (
             &same.quantisation.interior,
             (&same.total.interior, &same.algorithm.interior),
@@ -177,7 +194,10 @@ fn the_split_is_consistent_total_is_algorithm_plus_quantisation() {
         assert_eq!(q.identical_fraction, 1.0);
         assert_eq!(tot, alg);
     }
-    assert!(same.algorithm.whole.mean_abs > 0.0, "the method differs from the truth");
+    assert!(
+        same.algorithm.whole.mean_abs > 0.0,
+        "the method differs from the truth"
+    );
     // The real images: the signed means add up exactly, the regions partition the image.
     let rep = truth::assess(
         &scene,
@@ -191,7 +211,11 @@ fn the_split_is_consistent_total_is_algorithm_plus_quantisation() {
         },
     );
     for (tot, alg, q) in [
-        (&rep.total.whole, &rep.algorithm.whole, &rep.quantisation.whole),
+        (
+            &rep.total.whole,
+            &rep.algorithm.whole,
+            &rep.quantisation.whole,
+        ),
         (&rep.total.edge, &rep.algorithm.edge, &rep.quantisation.edge),
         (
             &rep.total.interior,
@@ -211,7 +235,10 @@ fn the_split_is_consistent_total_is_algorithm_plus_quantisation() {
         rep.total.edge.pixels + rep.total.interior.pixels,
         rep.total.whole.pixels
     );
-    assert!(rep.quantisation.whole.mean_abs > 0.0, "linear12 is not exact");
+    assert!(
+        rep.quantisation.whole.mean_abs > 0.0,
+        "linear12 is not exact"
+    );
     // The depth-edge band is the DoF stage's (the same for every method): the errors
     // concentrate there.
     assert!(rep.algorithm.edge.mean_abs > 5.0 * rep.algorithm.interior.mean_abs);
@@ -286,7 +313,10 @@ fn render_dof_truth_json_reports_the_split_and_the_noise() {
         &out,
     ]);
     assert_eq!(code, 0);
-    assert!(stdout.contains("depth-of-field truth: 8 lens points"), "{stdout}");
+    assert!(
+        stdout.contains("depth-of-field truth: 8 lens points"),
+        "{stdout}"
+    );
     assert!(stdout.contains("algorithm (float)"));
     let (_, stdout, _) = igemu(&["render", "default", "--json", "--no-local", "-o", &out]);
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
@@ -341,7 +371,10 @@ fn a_sweep_row_carries_the_truth_errors_and_the_truth_is_computed_once_per_scene
     let cache = pipeline::Cache::new();
     let mut runs = Vec::new();
     for (name, c) in [("cached", Some(&cache)), ("full", None)] {
-        let out = d.join(format!("{name}.jsonl")).to_string_lossy().into_owned();
+        let out = d
+            .join(format!("{name}.jsonl"))
+            .to_string_lossy()
+            .into_owned();
         let opts = sweep::SweepOptions {
             out: &out,
             resume: false,

@@ -59,7 +59,10 @@ mod tests {
         for (i, &(a, b)) in p.iter().enumerate() {
             let k = i as u32 / GROUPS;
             let q = (a * a + b * b) / (r * r) * m as f64;
-            assert!(q >= k as f64 - 1e-9 && q < (k + 1) as f64 + 1e-9, "{i}: {q}");
+            assert!(
+                q >= k as f64 - 1e-9 && q < (k + 1) as f64 + 1e-9,
+                "{i}: {q}"
+            );
         }
         // The centroid of the whole set is near the centre (a well-spread pattern).
         let (sa, sb) = p.iter().fold((0.0, 0.0), |s, &(a, b)| (s.0 + a, s.1 + b));

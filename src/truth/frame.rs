@@ -161,12 +161,7 @@ pub fn lens_frame(
 ) -> Vec<f64> {
     let host = front_end_through(scene, guard, Some(lens));
     let prims = input::float_prims(&host, hw);
-    let (region, reg) = regions(
-        &input::footprints(&host, hw),
-        k,
-        grid.width,
-        grid.height,
-    );
+    let (region, reg) = regions(&input::footprints(&host, hw), k, grid.width, grid.height);
     let frags = float_frags(&prims.f, grid, &reg, 0);
     let samples = float_samples(&prims, &frags, reg);
     drop(frags);

@@ -61,7 +61,7 @@ pub const DEFAULT_SAMPLES: u32 = 256;
 /// [`MIN_SAMPLES`]`..=`[`MAX_SAMPLES`]; the message names the range (the caller names the
 /// flag, `--lens-samples`).
 pub fn check_samples(n: u32) -> Result<(), String> {
-    if (MIN_SAMPLES..=MAX_SAMPLES).contains(&n) && n % GROUPS == 0 {
+    if (MIN_SAMPLES..=MAX_SAMPLES).contains(&n) && n.is_multiple_of(GROUPS) {
         Ok(())
     } else {
         Err(format!(

@@ -17,8 +17,7 @@ use crate::stage::logdomain::{
 use crate::stage::taps::{FrameCoding, FrameTap, SampleCoding, SampleTap, SampleTapF, Taps};
 use crate::stage::visibility::Samples;
 use crate::stage::{
-    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Region, Stage, StageId, TokenKind,
-    Tokens,
+    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Region, Stage, StageId, TokenKind, Tokens,
 };
 use rayon::prelude::*;
 use std::sync::Arc;
