@@ -75,7 +75,8 @@
 //! Files: `lens` (blur per depth code), `mask` (taps, difference degree), `layers` (the layer
 //! plan), `fixed` (the fixed datapath, `row_mac`), `float` (the layered float reference),
 //! `reference` (per-pixel scatter, theorem form, error split), `cost` (cost, memories,
-//! signals), `stage` (the stage contract).
+//! signals), `stage` (the stage contract); `layered` and `luminance/` the methods behind
+//! `dof.kind` (`method`).
 
 mod cost;
 mod fixed;
@@ -83,6 +84,7 @@ mod float;
 mod layered;
 mod layers;
 mod lens;
+pub mod luminance;
 mod mask;
 mod method;
 mod reference;
