@@ -1,22 +1,20 @@
-//! `dof.kind = "luminance"`: the luminance-aware blur (docs/dof-luminance.md). Flat fields,
-//! a bright point, a depth edge, fixed against float, the alpha ROM, cost and pack, the
-//! command line end to end and bad input. Figures are printed with `--nocapture`.
+//! `dof.kind = "luminance"`: the luminance-aware datapath (docs/dof-luminance.md). Flat
+//! fields, a bright point, a depth edge, fixed against float, overflow, the rounded divide
+//! and the alpha ROM. The whole render, cost and command line: tests/dof_luminance_run.rs.
+//! Figures are printed with `--nocapture`.
 
 mod common;
 
 use common::Rng;
-use igemu::config::{DofKind, HwConfig, LuminanceCfg};
+use igemu::config::{HwConfig, LuminanceCfg, SigmaForm};
 use igemu::error::Error;
-use igemu::files::TomlFile;
 use igemu::fixed::{Overflow, QFormat, Quant};
-use igemu::pipeline;
 use igemu::scene::{Lens, Scene};
 use igemu::stage::dof::LensMap;
 use igemu::stage::dof::luminance::{
-    ALPHA_LINES, ALPHA_ROM, AlphaMap, BLEED_LINES, LumParams, PRE_LINES, bleed_f64, bleed_fixed,
-    div_round, luminance_f64, luminance_fixed, pre_blur_f64, pre_blur_fixed,
+    AlphaMap, LumParams, LumWork, bleed_f64, bleed_fixed, div_round, luminance_f64,
+    luminance_fixed, pre_blur_f64, pre_blur_fixed,
 };
-use igemu::stage::{RunOptions, StageId, TokenKind};
 use proptest::prelude::*;
 
 const FRAME: QFormat = QFormat::new(false, 12, 0);
@@ -29,9 +27,16 @@ fn params(r: u32) -> LumParams {
     LumParams::of(&d, FRAME)
 }
 
-/// The lens of a scene as the dof stage builds it (24-bit depth codes).
+/// The lens of a scene as the dof stage builds it (24-bit depth codes) with sigma form
+/// `form` and the default sigma ROM.
+fn lens_with(s: &Scene, form: SigmaForm) -> LensMap {
+    let bits = HwConfig::default_config().dof.sigma_rom_bits;
+    LensMap::from_camera(&s.camera, s.image.height, Z_BITS, form, bits).expect("a thin lens")
+}
+
+/// The lens of a scene with the default (paper) sigma form.
 fn lens_of(s: &Scene) -> LensMap {
-    LensMap::from_camera(&s.camera, s.image.height, Z_BITS).expect("a thin lens")
+    lens_with(s, SigmaForm::Paper)
 }
 
 fn cone_focus() -> Scene {
@@ -68,43 +73,91 @@ fn random_keys(rng: &mut Rng, n: usize) -> Vec<u32> {
         .collect()
 }
 
+/// A flat field through the fixed model and the float reference at the given frame width,
+/// pre-blur radius, guard bits, rounding, depths (with the lens of `form`) and alpha widths:
+/// both return the field unchanged. The pre-blur sum is given the bits it needs.
+#[allow(clippy::too_many_arguments)]
+fn check_flat(
+    form: SigmaForm,
+    scene: &Scene,
+    bits: u32,
+    code: u32,
+    r: u32,
+    g: u32,
+    q: Quant,
+    (alpha_bits, rom_bits): (u32, u32),
+    keys: &[u32],
+    (w, h): (usize, usize),
+) -> Result<(), TestCaseError> {
+    let lens = lens_with(scene, form);
+    let cfg = LuminanceCfg {
+        radius: r,
+        alpha_bits,
+        alpha_rom_bits: rom_bits,
+        ..LuminanceCfg::default()
+    };
+    let alpha = AlphaMap::new(&lens, &cfg);
+    let a: Vec<u32> = keys.iter().map(|&k| alpha.code(k)).collect();
+    let count = (2 * r + 1) * (2 * r + 1);
+    let p = LumParams {
+        radius: r,
+        pre_bits: bits + (32 - count.leading_zeros()),
+        guard_bits: g,
+        alpha_bits,
+        quant: q,
+        overflow: Overflow::Error,
+        frame: QFormat::new(false, bits, 0),
+    };
+    let v = vec![code; w * h];
+    let (out, work) = luminance_fixed(&v, &a, w, h, &p).expect("the sum fits");
+    prop_assert_eq!(&out, &v, "{:?} r={} g={} {:?} {}x{}", form, r, g, q, w, h);
+    prop_assert_eq!(work.bleeding, 0);
+    prop_assert_eq!(work.pre.overflows + work.out.overflows, 0);
+    let vf = vec![f64::from(code); w * h];
+    let af: Vec<f64> = keys.iter().map(|&k| alpha.alpha_f64(&lens, k)).collect();
+    let f = luminance_f64(&vf, &af, w, h, r as usize);
+    prop_assert!(f.iter().all(|&o| o == f64::from(code)));
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// Flat fields are bit-identical for any code of any frame width, any depth image (a
+    /// third of the pixels at infinity: the method reads no coverage, so partly covered
+    /// pixels are codes like any other), both sigma forms, both Fig. 3 lenses, any radius,
+    /// guard bits, rounding and alpha widths, any frame shape (1 x 1 and thin lines too).
+    #[test]
+    fn flat_field_is_bit_identical(
+        paper in any::<bool>(), cone in any::<bool>(), bits in 1u32..17, code_seed in any::<u64>(),
+        r in 0u32..5, g in 0u32..17, q in 0usize..7, ab in 2u32..17, rb in 2u32..17,
+        w in 1usize..14, h in 1usize..14, seed in any::<u64>(),
+    ) {
+        let form = if paper { SigmaForm::Paper } else { SigmaForm::Affine };
+        let scene = if cone { cone_focus() } else { Scene::default_scene() };
+        // The extremes as often as the rest.
+        let max = (1u64 << bits) - 1;
+        let code = match code_seed % 4 { 0 => 0, 1 => max, _ => code_seed % (max + 1) } as u32;
+        let keys = random_keys(&mut Rng(seed | 1), w * h);
+        check_flat(form, &scene, bits, code, r, g, Quant::ALL[q], (ab, rb), &keys, (w, h))?;
+    }
+}
+
 #[test]
-fn flat_field_any_code_any_depths_is_bit_identical() {
-    // The method reads no coverage: partly covered pixels are frame codes like any other,
-    // so "partial coverage" is a random mix of depths including the background's.
-    let lens = lens_of(&Scene::default_scene());
-    let alpha = AlphaMap::new(&lens, &LuminanceCfg::default());
-    let mut rng = Rng(0x1a_b1e5);
-    let mut checked = 0;
-    for code in [0u32, 1, 2, 1000, 2047, 4094, 4095, 3117] {
-        for r in 0..=3 {
-            for (w, h) in [(1, 1), (1, 7), (9, 1), (13, 11)] {
-                for q in Quant::ALL {
-                    let keys = random_keys(&mut rng, w * h);
-                    let a: Vec<u32> = keys.iter().map(|&k| alpha.code(k)).collect();
-                    // The window sum needs 12 bits + log2 of the window's pixel count.
-                    let count = (2 * r + 1) * (2 * r + 1);
-                    let p = LumParams {
-                        quant: q,
-                        guard_bits: (r + code) % 5,
-                        pre_bits: 12 + (32 - count.leading_zeros()),
-                        ..params(r)
-                    };
-                    let v = vec![code; w * h];
-                    let (out, work) = luminance_fixed(&v, &a, w, h, &p).unwrap();
-                    assert!(out.iter().all(|&o| o == code), "{code} r={r} {w}x{h} {q:?}");
-                    assert_eq!(work.bleeding, 0);
-                    assert_eq!(work.out.overflows, 0);
-                    let vf = vec![code as f64; w * h];
-                    let af: Vec<f64> = keys.iter().map(|&k| alpha.alpha_f64(&lens, k)).collect();
-                    let f = luminance_f64(&vf, &af, w, h, r as usize);
-                    assert!(f.iter().all(|&o| o == code as f64));
-                    checked += 1;
+fn flat_field_corner_cases_are_bit_identical() {
+    // The largest 16-bit code, with a pre-blur window larger than the frame, at every
+    // rounding, both forms, with all pixels at infinity and all in the focus band.
+    let scene = cone_focus();
+    let lens = lens_of(&scene);
+    for form in [SigmaForm::Paper, SigmaForm::Affine] {
+        for q in Quant::ALL {
+            for keys in [vec![u32::MAX; 15], vec![in_band_key(&lens); 15]] {
+                for (w, h) in [(15, 1), (1, 15), (5, 3)] {
+                    check_flat(form, &scene, 16, 65535, 8, 16, q, (16, 16), &keys, (w, h)).unwrap();
                 }
             }
         }
     }
-    println!("flat fields: {checked} cases bit-identical, fixed and float");
 }
 
 /// The 8 symmetries of the square applied to `(x, y)` in an `n x n` image.
@@ -137,7 +190,7 @@ fn bright_point_bleeds_only_into_darker_neighbours() {
         assert!(out.iter().all(|&o| (dark..=bright).contains(&o)));
         // The bleed only takes from brighter neighbours: it never darkens the pre-blurred
         // image and never goes above the brightest neighbour.
-        let mut work = igemu::stage::dof::luminance::LumWork::new(&p);
+        let mut work = LumWork::new(&p);
         let pre = pre_blur_fixed(&v, N, N, &p, &mut work).unwrap();
         let blur = bleed_fixed(&pre, N, N, p.quant, &mut work);
         for y in 0..N {
@@ -220,7 +273,7 @@ fn depth_edge_in_focus_object_changes_by_at_most_its_scaled_alpha_share() {
             .map(|&k| if k == u32::MAX { bg } else { obj })
             .collect();
         let out = run(&v, &a, w, h, &p);
-        let mut work = igemu::stage::dof::luminance::LumWork::new(&p);
+        let mut work = LumWork::new(&p);
         let pre = pre_blur_fixed(&v, w, h, &p, &mut work).unwrap();
         let blur = bleed_fixed(&pre, w, h, p.quant, &mut work);
         let (mut obj_max, mut bg_max) = (0i64, 0i64);
@@ -335,7 +388,7 @@ fn fixed_vs_float_measured_on_random_frames() {
         let vf: Vec<f64> = v.iter().map(|&x| x as f64).collect();
         let af: Vec<f64> = a.iter().map(|&x| x as f64 / one).collect();
         let f = luminance_f64(&vf, &af, w, h, 1);
-        let mut work = igemu::stage::dof::luminance::LumWork::new(&p);
+        let mut work = LumWork::new(&p);
         let pre = pre_blur_fixed(&v, w, h, &p, &mut work).unwrap();
         let bq = bleed_fixed(&pre, w, h, p.quant, &mut work);
         let bf = bleed_f64(&pre_blur_f64(&vf, w, h, 1), w, h);
@@ -464,8 +517,9 @@ fn alpha_rom_entries_follow_the_formula() {
             }
             assert_eq!(a.index(u32::MAX), a.rom.len() - 1);
             assert_eq!(a.index((1 << Z_BITS) - 1), a.rom.len() - 2);
-            // Non-decreasing away from the focus on both sides.
-            let focus = a.index(key((l.z_near_edge + l.z_far_edge) / 2.0));
+            // Non-decreasing away from the focus (screen z where 1/D = 1/U) on both sides.
+            let z_focus = (l.inv_near - l.inv_focus) / (l.inv_near - l.inv_far);
+            let focus = a.index(key(z_focus));
             let finite = &a.rom[..a.rom.len() - 1];
             assert!(finite[focus..].windows(2).all(|p| p[0] <= p[1]));
             assert!(finite[..=focus].windows(2).all(|p| p[0] >= p[1]));
@@ -502,179 +556,4 @@ fn alpha_rom_entries_follow_the_formula() {
     let a = AlphaMap::new(&l, &LuminanceCfg::default());
     assert_eq!((a.index_bits, a.rom.len()), (8, 257));
     assert_eq!(a.index(200), 200);
-}
-
-fn lum_hw() -> HwConfig {
-    common::hw("linear12", |h| h.dof.kind = DofKind::Luminance)
-}
-
-#[test]
-fn default_kind_stays_layered() {
-    assert_eq!(HwConfig::default_config().dof.kind, DofKind::Layered);
-    for p in igemu::config::PRESETS {
-        let h = HwConfig::preset(p).unwrap();
-        assert_eq!(h.dof.kind, DofKind::Layered);
-        assert_eq!(h.dof.luminance, LuminanceCfg::default());
-    }
-}
-
-#[test]
-fn render_reports_work_signals_cost_pack_and_row_tokens() {
-    let scene = Scene::default_scene();
-    let r = pipeline::render(&scene, &lum_hw(), RunOptions::default()).unwrap();
-    let d = r.report.stages.iter().find(|s| s.name == "dof").unwrap();
-    let (w, h) = (640u64, 480u64);
-    assert_eq!(d.work["pixels"], w * h);
-    assert_eq!(d.work["macs"], 9 * w * h);
-    assert_eq!(d.work["divides"], 2 * w * h);
-    assert_eq!(d.work["rom_reads"], w * h);
-    assert_eq!(d.work["pre_adds"], 4 * w * h);
-    assert!(d.work["bleeding"] > 0);
-    let names: Vec<&str> = d.signals.iter().map(|s| s.name.as_str()).collect();
-    assert_eq!(
-        names,
-        ["dof.lum.pre", "dof.lum.mean", "dof.lum.blur", "dof.lum.out"]
-    );
-    assert!(d.signals.iter().all(|s| s.overflows == 0));
-    assert!(d.notes["alpha"]["band_pixels"].as_u64().unwrap() > 0);
-    // Cost, exact from the formats: 12-bit codes, 4 guard bits, UQ1.10 alpha, 2^10 + 1
-    // ROM entries, radius 1.
-    let mem = |n: &str| d.cost.memories.iter().find(|m| m.name == n).unwrap();
-    assert_eq!((mem(PRE_LINES).depth, mem(PRE_LINES).width), (2 * w, 12));
-    assert_eq!(
-        (mem(BLEED_LINES).depth, mem(BLEED_LINES).width),
-        (2 * w, 16)
-    );
-    assert_eq!(
-        (mem(ALPHA_LINES).depth, mem(ALPHA_LINES).width),
-        (2 * w, 11)
-    );
-    assert_eq!((mem(ALPHA_ROM).depth, mem(ALPHA_ROM).width), (1025, 11));
-    assert_eq!(d.cost.storage_bits, 2 * w * (12 + 16 + 11));
-    assert_eq!(d.cost.lut_bits, 1025 * 11);
-    let pack = r
-        .report
-        .cycles
-        .cost
-        .packed
-        .iter()
-        .find(|p| p.name == ALPHA_ROM)
-        .unwrap();
-    assert!(pack.verified, "{pack:?}");
-    assert_eq!(pack.cost_bits, 1025 * 11);
-    // One row token per screen row after accumulate's tiles, chained to gamma by a FIFO.
-    let st = &r.workload.stages;
-    let i = st.iter().position(|s| s.id == StageId::Dof).unwrap();
-    assert_eq!(st[i].kind, TokenKind::Row);
-    assert_eq!(st[i].items, vec![2 * w; h as usize]);
-    assert_eq!(st[i - 1].id, StageId::Accumulate);
-    assert_eq!(st[i].feeder, None);
-    assert_eq!(st[i + 1].id, StageId::Gamma);
-    assert_eq!(st[i + 1].feeder, Some(i));
-    // Stage-local: fixed against the float method on the same frame.
-    let local = d.local.as_ref().unwrap();
-    assert!(local.max_abs_lsb < 2.0, "{local:?}");
-    println!(
-        "default scene: local max {:.3} LSB, identical {:.2} %, {} cycles per frame, dof {:.1} ms",
-        local.max_abs_lsb,
-        100.0 * local.identical as f64 / local.values as f64,
-        r.report.cycles.total_cycles,
-        d.fixed_ms
-    );
-}
-
-fn write(name: &str, text: &str) -> String {
-    let d = std::env::temp_dir().join(format!("igemu-lum-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
-    std::fs::write(&p, text).unwrap();
-    p.to_string_lossy().into_owned()
-}
-
-#[test]
-fn command_line_renders_default_and_cone_focus_and_counts_cycles() {
-    let hw = write("lum.toml", "[dof]\nkind = \"luminance\"\n");
-    let out = write("o.png", "");
-    for scene in ["default", "cone-focus"] {
-        let (code, stdout, err) = common::igemu(&["render", scene, "--hw", &hw, "-o", &out]);
-        assert_eq!(code, 0, "{err}");
-        assert!(stdout.contains("luminance-aware blur"), "{stdout}");
-        assert!(
-            stdout.contains("dof luminance alpha ROM 11275 bits ok"),
-            "{stdout}"
-        );
-        let line = stdout.lines().find(|l| l.starts_with("dof ")).unwrap();
-        assert!(
-            line.contains("bleeding") && line.contains("rom_reads"),
-            "{line}"
-        );
-        let (code, json, err) =
-            common::igemu(&["render", scene, "--hw", &hw, "-o", &out, "--json"]);
-        assert_eq!(code, 0, "{err}");
-        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
-        let d = v["stages"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|s| s["name"] == "dof")
-            .unwrap();
-        assert_eq!(d["work"]["pixels"], 640 * 480);
-        assert!(d["notes"]["alpha"]["max"].as_f64().unwrap() > 0.0);
-    }
-    let (code, stdout, err) = common::igemu(&["cycles", "default", "--hw", &hw]);
-    assert_eq!(code, 0, "{err}");
-    let line = stdout.lines().find(|l| l.starts_with("dof ")).unwrap();
-    assert!(
-        line.contains(" 480 ") && line.ends_with("pass outputs"),
-        "{line}"
-    );
-}
-
-#[test]
-fn bad_values_are_refused_naming_the_field_and_range() {
-    let cases = [
-        ("radius", "9", "0..=8"),
-        ("pre_bits", "7", "8..=48"),
-        ("guard_bits", "17", "0..=16"),
-        ("alpha_bits", "1", "2..=16"),
-        ("alpha_rom_bits", "17", "2..=16"),
-        ("focus_scale", "1.5", "[0.0, 1.0]"),
-        ("focus_scale", "nan", "[0.0, 1.0]"),
-        ("ramp", "-1.0", "[0.0, 1000.0]"),
-        ("ramp", "inf", "[0.0, 1000.0]"),
-    ];
-    let out = write("bad.png", "");
-    for (field, bad, range) in cases {
-        let path = format!("dof.luminance.{field}");
-        let text = format!("[dof]\nkind = \"luminance\"\n[dof.luminance]\n{field} = {bad}\n");
-        // The library: the field, its line, the range; the hint names the same range.
-        let e = HwConfig::from_toml(&TomlFile::from_text("h.toml", &text)).unwrap_err();
-        assert_eq!(e.field, path, "{e}");
-        assert_eq!(e.line, Some(4), "{e}");
-        assert!(e.msg.contains(range), "{e}");
-        let hint = HwConfig::field_hint(&path).unwrap();
-        assert!(hint.contains(range), "{path}: {hint}");
-        // The command line: exit 2 with the same.
-        let hw = write(&format!("{field}.toml"), &text);
-        let (code, _, err) = common::igemu(&["render", "--hw", &hw, "-o", &out]);
-        assert_eq!(code, 2, "{field} = {bad}: {err}");
-        assert!(err.contains(&path) && err.contains(range), "{err}");
-    }
-    // Wrong types and unknown fields name the field too.
-    for (text, want) in [
-        ("[dof.luminance]\nradius = -1\n", "dof.luminance.radius"),
-        ("[dof.luminance]\nradius = \"2\"\n", "dof.luminance.radius"),
-        ("[dof.luminance]\nradios = 2\n", "radios"),
-    ] {
-        let hw = write("t.toml", text);
-        let (code, _, err) = common::igemu(&["render", "--hw", &hw, "-o", &out]);
-        assert_eq!(code, 2, "{text}: {err}");
-        assert!(err.contains(want), "{text}: {err}");
-    }
-    assert!(
-        HwConfig::field_hint("dof.luminance")
-            .unwrap()
-            .contains("focus_scale")
-    );
-    assert!(HwConfig::field_hint("dof.luminance.nothing").is_none());
 }
