@@ -9,7 +9,8 @@ use igemu::files::TomlFile;
 use igemu::pipeline;
 use igemu::scene::Scene;
 use igemu::stage::dof::luminance::{ALPHA_LINES, ALPHA_ROM, BLEED_LINES, PRE_LINES};
-use igemu::stage::{RunOptions, StageId, TokenKind};
+use igemu::stage::{MemKind, RunOptions, StageId, TokenKind};
+use std::collections::BTreeSet;
 
 fn lum_hw() -> HwConfig {
     common::hw("linear12", |h| h.dof.kind = DofKind::Luminance)
@@ -105,7 +106,14 @@ fn command_line_renders_default_and_cone_focus_and_counts_cycles() {
     for scene in ["default", "cone-focus"] {
         let (code, stdout, err) = common::igemu(&["render", scene, "--hw", &hw, "-o", &out]);
         assert_eq!(code, 0, "{err}");
-        assert!(stdout.contains("luminance-aware blur"), "{stdout}");
+        // The plan runs dof and gives the luminance method as its reason.
+        let plan = stdout
+            .lines()
+            .find(|l| l.trim_start().starts_with("dof ") && l.contains("thin lens"))
+            .unwrap_or_else(|| panic!("{stdout}"));
+        let words: Vec<&str> = plan.split_whitespace().collect();
+        assert_eq!(&words[..2], ["dof", "in"], "{plan}");
+        assert!(plan.contains("luminance-aware blur"), "{plan}");
         assert!(
             stdout.contains("dof luminance alpha ROM 11275 bits ok"),
             "{stdout}"
@@ -184,4 +192,53 @@ fn bad_values_are_refused_naming_the_field_and_range() {
             .contains("focus_scale")
     );
     assert!(HwConfig::field_hint("dof.luminance.nothing").is_none());
+}
+
+#[test]
+fn every_dof_memory_with_contents_has_an_image_and_the_bits_add_up() {
+    // As tests/cost.rs for the other plans: the line buffers hold transient values (no
+    // image); the alpha ROM's contents are the model's, imaged, packed once and verified;
+    // storage and ROM bits are the sums of the memories, also after a log-add frame.
+    let transient = [PRE_LINES, BLEED_LINES, ALPHA_LINES];
+    for preset in ["linear12", "log8-logadd"] {
+        for scene in [
+            Scene::default_scene(),
+            Scene::embedded("cone-focus").unwrap(),
+        ] {
+            let hw = common::hw(preset, |h| h.dof.kind = DofKind::Luminance);
+            let r = pipeline::render(&scene, &hw, RunOptions::FAST).unwrap();
+            let s = r.steps.iter().find(|s| s.id == StageId::Dof).unwrap();
+            let (o, cost) = (&s.outcome, &s.outcome.report.cost);
+            let held: BTreeSet<&str> = cost
+                .memories
+                .iter()
+                .map(|m| m.name.as_str())
+                .filter(|n| !transient.contains(n))
+                .collect();
+            let imaged: BTreeSet<&str> = o.images.iter().map(|i| i.name.as_str()).collect();
+            assert_eq!(imaged, held, "{preset} {}", scene.name);
+            assert_eq!(o.images.len(), held.len());
+            assert!(imaged.contains(ALPHA_ROM));
+            assert_eq!(
+                imaged.contains("dof potentiation LUT"),
+                preset == "log8-logadd"
+            );
+            assert_eq!(o.packs.len(), o.images.len());
+            assert!(o.packs.iter().all(|p| p.verified), "{:?}", o.packs);
+            let sum = |k: MemKind| {
+                cost.memories
+                    .iter()
+                    .filter(|m| m.kind == k)
+                    .map(|m| m.bits())
+                    .sum::<u64>()
+            };
+            assert_eq!(cost.storage_bits, sum(MemKind::Ram));
+            assert_eq!(cost.lut_bits, sum(MemKind::Rom));
+            for (im, p) in o.images.iter().zip(&o.packs) {
+                let m = cost.memories.iter().find(|m| m.name == im.name).unwrap();
+                assert_eq!(im.fields.iter().sum::<u32>(), m.width, "{}", im.name);
+                assert_eq!((im.words as u64, p.cost_bits), (m.depth, m.bits()));
+            }
+        }
+    }
 }
