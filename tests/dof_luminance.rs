@@ -192,7 +192,7 @@ fn bright_point_bleeds_only_into_darker_neighbours() {
         // image and never goes above the brightest neighbour.
         let mut work = LumWork::new(&p);
         let pre = pre_blur_fixed(&v, N, N, &p, &mut work).unwrap();
-        let blur = bleed_fixed(&pre, N, N, p.quant, &mut work);
+        let blur = bleed_fixed(&pre, N, N, &p, &mut work);
         for y in 0..N {
             for x in 0..N {
                 let i = y * N + x;
@@ -275,7 +275,7 @@ fn depth_edge_in_focus_object_changes_by_at_most_its_scaled_alpha_share() {
         let out = run(&v, &a, w, h, &p);
         let mut work = LumWork::new(&p);
         let pre = pre_blur_fixed(&v, w, h, &p, &mut work).unwrap();
-        let blur = bleed_fixed(&pre, w, h, p.quant, &mut work);
+        let blur = bleed_fixed(&pre, w, h, &p, &mut work);
         let (mut obj_max, mut bg_max) = (0i64, 0i64);
         for i in 0..w * h {
             let x = i % w;
@@ -390,7 +390,7 @@ fn fixed_vs_float_measured_on_random_frames() {
         let f = luminance_f64(&vf, &af, w, h, 1);
         let mut work = LumWork::new(&p);
         let pre = pre_blur_fixed(&v, w, h, &p, &mut work).unwrap();
-        let bq = bleed_fixed(&pre, w, h, p.quant, &mut work);
+        let bq = bleed_fixed(&pre, w, h, &p, &mut work);
         let bf = bleed_f64(&pre_blur_f64(&vf, w, h, 1), w, h);
         for i in 0..w * h {
             worst = worst.max((out[i] as f64 - f[i]).abs());

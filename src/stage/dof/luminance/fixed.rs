@@ -138,8 +138,9 @@ fn window_sums(src: &[u64], r: usize, dst: &mut [u64]) {
 /// The mean pre-blur: per pixel the sum of the frame codes in the `(2r+1)^2` window inside
 /// the image, saturated to `pre_bits` (counted; `Err` with overflow mode ERROR), divided by
 /// the window's in-image pixel count (border renormalisation) with `guard_bits` more
-/// fraction bits, rounded with `quant`. The mean cannot exceed the largest code, so it fits
-/// [`LumParams::mean_format`]. With r = 0 it is the frame itself, shifted.
+/// fraction bits, rounded with `quant`, stored in [`LumParams::mean_format`] with SAT (signal
+/// `dof.lum.mean`; the mean cannot exceed the largest code, so SAT does not act). With r = 0
+/// it is the frame itself, shifted.
 pub fn pre_blur_fixed(
     value: &[u32],
     w: usize,
@@ -154,6 +155,7 @@ pub fn pre_blur_fixed(
     let ones = vec![1u64; 2 * r + 1];
     let (nx, ny) = (border_sums(&ones, w), border_sums(&ones, h));
     let max = (1u128 << p.pre_bits) - 1;
+    let mq = Quantizer::new(p.mean_format(), p.quant, Overflow::Sat);
     // Column sums of 2r + 1 rows, kept running down the image.
     let mut col: Vec<u64> = vec![0; w];
     for row in value.chunks_exact(w).take(r + 1) {
@@ -182,10 +184,13 @@ pub fn pre_blur_fixed(
                 }
             }
             let n = u128::from(nx[x] * ny[y]);
-            let m = div_round(s.min(max) << g, n, p.quant);
-            work.mean
-                .record((s.min(max) << g) as f64 / n as f64, m as i128, false);
-            out[y * w + x] = m as u64;
+            let m = mq.handle_overflow(div_round(s.min(max) << g, n, p.quant) as i128);
+            work.mean.record(
+                (s.min(max) << g) as f64 / n as f64,
+                i128::from(m.code),
+                m.overflow,
+            );
+            out[y * w + x] = m.code as u64;
         }
         if y + r + 1 < h {
             let add = &value[(y + r + 1) * w..(y + r + 2) * w];
@@ -222,9 +227,10 @@ pub const NEIGHBOURS: [(i64, i64); 8] = [
 /// neighbours i inside the image with `Δ_i = P_c - P_i < 0` (brighter) weighted by `|Δ_i|`,
 /// `blur = sum |Δ_i| P_i / sum |Δ_i|` rounded with `quant` (one divide), `P_c` when no
 /// neighbour is brighter. Exact integer sums (weights `W + g` bits, their sum 3 bits more,
-/// the numerator `2 (W + g) + 3` bits); the result is a weighted mean of values of the mean
-/// format, so it fits that format.
-pub fn bleed_fixed(pre: &[u64], w: usize, h: usize, q: Quant, work: &mut LumWork) -> Vec<u64> {
+/// the numerator `2 (W + g) + 3` bits), stored in the mean format with SAT (signal
+/// `dof.lum.blur`; a weighted mean of values of that format fits it, so SAT does not act).
+pub fn bleed_fixed(pre: &[u64], w: usize, h: usize, p: &LumParams, work: &mut LumWork) -> Vec<u64> {
+    let bq = Quantizer::new(p.mean_format(), p.quant, Overflow::Sat);
     let mut out = vec![0u64; w * h];
     for y in 0..h {
         for x in 0..w {
@@ -245,9 +251,10 @@ pub fn bleed_fixed(pre: &[u64], w: usize, h: usize, q: Quant, work: &mut LumWork
                 c
             } else {
                 work.bleeding += 1;
-                let b = div_round(num, den, q);
-                work.blur.record(num as f64 / den as f64, b as i128, false);
-                b as u64
+                let b = bq.handle_overflow(div_round(num, den, p.quant) as i128);
+                work.blur
+                    .record(num as f64 / den as f64, i128::from(b.code), b.overflow);
+                b.code as u64
             };
             out[y * w + x] = b;
         }
@@ -306,7 +313,7 @@ pub fn luminance_fixed(
 ) -> Result<(Vec<u32>, LumWork)> {
     let mut work = LumWork::new(p);
     let pre = pre_blur_fixed(value, w, h, p, &mut work)?;
-    let blur = bleed_fixed(&pre, w, h, p.quant, &mut work);
+    let blur = bleed_fixed(&pre, w, h, p, &mut work);
     let out = blend_fixed(value, &blur, alpha, p, &mut work);
     Ok((out, work))
 }
