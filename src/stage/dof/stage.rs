@@ -5,11 +5,12 @@
 //! the stage-local comparison, the method's cycle-model tokens, cost and ROMs.
 
 use super::layered::Layered;
+use super::luminance::{LumPlan, Luminance};
 use super::method::{Method, n2};
 use super::potentiate::FramePotentiation;
 use super::{
-    DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, difference_degree,
-    edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
+    DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, depth_edge_band,
+    difference_degree, edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
 };
 use crate::config::{CodingKind, DofKind, HwConfig};
 use crate::error::{Error, FileError, Result};
@@ -23,6 +24,8 @@ use std::sync::Arc;
 pub enum MethodPlan {
     /// `dof.kind = "layered"`.
     Layered(LayerPlan),
+    /// `dof.kind = "luminance"`.
+    Luminance(LumPlan),
 }
 
 /// Runs `$body` with `$m` bound to the method and `$plan` to its plan.
@@ -31,6 +34,10 @@ macro_rules! with_method {
         match $mp {
             MethodPlan::Layered($plan) => {
                 let $m = &Layered;
+                $body
+            }
+            MethodPlan::Luminance($plan) => {
+                let $m = &Luminance;
                 $body
             }
         }
@@ -90,6 +97,10 @@ impl Stage for Dof {
         };
         let method = match hw.dof.kind {
             DofKind::Layered => format!("layered blur of the frame, threshold P = {}", hw.dof.p),
+            DofKind::Luminance => format!(
+                "luminance-aware blur of the frame, pre-blur radius {}",
+                hw.dof.luminance.radius
+            ),
             k => {
                 return Err(Error::File(FileError {
                     file: hw.name.clone(),
@@ -152,7 +163,8 @@ impl Stage for Dof {
         .expect("the plan runs dof for a thin lens only");
         let (plan, out, mut facts) = match hw.dof.kind {
             DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
-            DofKind::Luminance | DofKind::Downsample => unreachable!("refused by the plan"),
+            DofKind::Luminance => run(&Luminance, cx, frame, &lens, MethodPlan::Luminance)?,
+            DofKind::Downsample => unreachable!("refused by the plan"),
         };
         if let Some(pot) = &pot {
             facts.work.push(("potentiations", frame.acc.len() as u64));
@@ -286,6 +298,12 @@ fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
                 difference_degree(&add_q, &pp).into();
             let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0);
             (edge_band(w, h, &plan.index, m_max), m_max)
+        }
+        MethodPlan::Luminance(_) => {
+            // The method reaches r (pre-blur) + 1 (bleed) pixels.
+            let r = p.luminance.radius as usize + 1;
+            let (k, c) = (&frame.depth, &frame.coverage);
+            (depth_edge_band(w, h, k, c, n2(cx), &b.lens, r), r)
         }
     };
     notes["composited_fixed"] = v(&region_error(&outf, &pp, &edge));
