@@ -78,6 +78,7 @@
 //! signals), `stage` (the stage contract).
 
 mod cost;
+pub mod downsample;
 mod fixed;
 mod float;
 mod layered;

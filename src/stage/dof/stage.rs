@@ -4,11 +4,12 @@
 //! on request the per-pixel scatter and, for the layered method, the layer theorem check),
 //! the stage-local comparison, the method's cycle-model tokens, cost and ROMs.
 
+use super::downsample::{DownPlan, Downsample};
 use super::layered::Layered;
 use super::method::{Method, n2};
 use super::{
-    DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, difference_degree,
-    edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
+    DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, depth_edge_band,
+    difference_degree, edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
 };
 use crate::config::{CodingKind, DofKind, HwConfig};
 use crate::error::{Error, FileError, Result};
@@ -22,6 +23,8 @@ use std::sync::Arc;
 pub enum MethodPlan {
     /// `dof.kind = "layered"`.
     Layered(LayerPlan),
+    /// `dof.kind = "downsample"`.
+    Downsample(DownPlan),
 }
 
 /// Runs `$body` with `$m` bound to the method and `$plan` to its plan.
@@ -30,6 +33,10 @@ macro_rules! with_method {
         match $mp {
             MethodPlan::Layered($plan) => {
                 let $m = &Layered;
+                $body
+            }
+            MethodPlan::Downsample($plan) => {
+                let $m = &Downsample;
                 $body
             }
         }
@@ -99,6 +106,10 @@ impl Stage for Dof {
         }
         let method = match hw.dof.kind {
             DofKind::Layered => format!("layered blur of the frame, threshold P = {}", hw.dof.p),
+            DofKind::Downsample => format!(
+                "downsample by {0}x{0}, Gaussian, blend by {1} Poisson-disc taps in the CoC",
+                hw.dof.downsample.factor, hw.dof.downsample.taps
+            ),
             k => {
                 return Err(Error::File(FileError {
                     file: hw.name.clone(),
@@ -141,7 +152,8 @@ impl Stage for Dof {
         .expect("the plan runs dof for a thin lens only");
         let (plan, out, mut facts) = match hw.dof.kind {
             DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
-            DofKind::Luminance | DofKind::Downsample => unreachable!("refused by the plan"),
+            DofKind::Downsample => run(&Downsample, cx, frame, &lens, MethodPlan::Downsample)?,
+            DofKind::Luminance => unreachable!("refused by the plan"),
         };
         // Blur facts.
         let (mut sig_min, mut sig_max) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -257,6 +269,11 @@ fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
                 difference_degree(&add_q, &pp).into();
             let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0);
             (edge_band(w, h, &plan.index, m_max), m_max)
+        }
+        MethodPlan::Downsample(plan) => {
+            let r = plan.reach;
+            let band = depth_edge_band(w, h, &frame.depth, &frame.coverage, n2(cx), &b.lens, r);
+            (band, r)
         }
     };
     notes["composited_fixed"] = v(&region_error(&outf, &pp, &edge));
