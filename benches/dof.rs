@@ -20,8 +20,14 @@ fn bench(c: &mut Criterion) {
         pipeline::run_through(&scene, &hw, RunOptions::FAST, StageId::Accumulate).unwrap();
     let fr = &taps.fixed.frame().frame;
     let (w, h) = (fr.width as usize, fr.height as usize);
-    let lens =
-        LensMap::from_camera(&scene.camera, fr.height, hw.visibility.z.format.frac_bits).unwrap();
+    let lens = LensMap::from_camera(
+        &scene.camera,
+        fr.height,
+        hw.visibility.z.format.frac_bits,
+        hw.dof.sigma,
+        hw.dof.sigma_rom_bits,
+    )
+    .unwrap();
     let plan = plan_layers(&fr.depth, &fr.coverage, 16, &lens, &hw.dof).unwrap();
     let img = DepthImage {
         width: w,

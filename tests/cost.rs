@@ -1,6 +1,7 @@
 //! The cost model and the pack check (docs/reference.md §7b):
 //!
-//! * for six plans (default thin lens on linear12; the pinhole default with log8-logadd and
+//! * for seven plans (default thin lens on linear12 and on log8-logadd, whose DoF potentiates
+//!   the log frame through a LUT; the pinhole default with log8-logadd and
 //!   with log8-potentiate; a Bayer dither after the LUT, one before it, Floyd-Steinberg)
 //!   every packed memory is verified and the packed set names exactly the memories the plan
 //!   uses, in particular the gamma LUT it really builds;
@@ -49,7 +50,7 @@ fn dither(kind: DitherKind, placement: Placement) -> HwConfig {
     })
 }
 
-/// The six plans, rendered once.
+/// The seven plans, rendered once.
 fn cases() -> &'static [Case] {
     static CASES: OnceLock<Vec<Case>> = OnceLock::new();
     CASES.get_or_init(|| {
@@ -71,7 +72,27 @@ fn cases() -> &'static [Case] {
                 "default thin lens linear12",
                 Scene::default_scene(),
                 HwConfig::default_config(),
-                with(&[(Dof, "dof coefficient ROM"), (Gamma, "gamma ROM")]),
+                with(&[
+                    (Dof, "dof coefficient ROM"),
+                    (Dof, "dof sigma ROM"),
+                    (Gamma, "gamma ROM"),
+                ]),
+            ),
+            (
+                "default thin lens log8-logadd",
+                Scene::default_scene(),
+                HwConfig::preset("log8-logadd").unwrap(),
+                vec![
+                    (Logdomain, "log encoder threshold ROM"),
+                    (Logdomain, "sample buffer"),
+                    (Accumulate, "frame memory"),
+                    (Accumulate, "log weight ROM"),
+                    (Accumulate, "sb table"),
+                    (Dof, "dof coefficient ROM"),
+                    (Dof, "dof sigma ROM"),
+                    (Dof, "dof potentiation LUT"),
+                    (Gamma, "gamma ROM"),
+                ],
             ),
             (
                 "pinhole log8-logadd",
@@ -437,14 +458,15 @@ fn rom_out_matches(scene: &str, hw_arg: &str, r: &Render, tag: &str) -> BTreeSet
 
 #[test]
 fn rom_out_writes_the_images_of_the_library_render() {
-    // The default plan: gamma ROM, frame memory, filter weights, dof coefficients; the
-    // sample buffer is over the size limit and listed only.
+    // The default plan: gamma ROM, frame memory, filter weights, dof coefficients and the
+    // sigma ROM; the sample buffer is over the size limit and listed only.
     let written = rom_out_matches("default", "linear12", &cases()[0].render, "default");
     for name in [
         "gamma ROM",
         "frame memory",
         "filter weight ROM",
         "dof coefficient ROM",
+        "dof sigma ROM",
     ] {
         assert!(written.contains(name), "{written:?}");
     }
@@ -456,7 +478,7 @@ fn rom_out_writes_the_images_of_the_library_render() {
     let written = rom_out_matches(
         "default-pinhole",
         hw_file.to_str().unwrap(),
-        &cases()[3].render,
+        &cases()[4].render,
         "bayer4",
     );
     for name in [
@@ -470,7 +492,7 @@ fn rom_out_writes_the_images_of_the_library_render() {
     let written = rom_out_matches(
         "default-pinhole",
         "log8-logadd",
-        &cases()[1].render,
+        &cases()[2].render,
         "logadd",
     );
     for name in [

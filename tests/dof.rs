@@ -4,11 +4,10 @@
 mod common;
 
 use common::Rng;
-use igemu::config::DofCfg;
-use igemu::config::HwConfig;
+use igemu::config::{DofCfg, HwConfig, SigmaForm};
 use igemu::fixed::{Overflow, QFormat, Quant, round_shift};
 use igemu::pipeline;
-use igemu::scene::Scene;
+use igemu::scene::{Lens, Scene, depth_from_screen_z};
 use igemu::stage::RunOptions;
 use igemu::stage::dof::{
     DepthImage, G_FRAC, LayerPlan, LensMap, SIGMA_FRAC, additive_layered, difference_degree,
@@ -27,6 +26,14 @@ fn params() -> DofCfg {
 /// A synthetic lens: sigma = 12 (z - 0.5) behind 0.5, 12 (z - 0.4) in front of 0.4 (pixels).
 fn lens() -> LensMap {
     LensMap {
+        form: SigmaForm::Affine,
+        k: 12.0,
+        inv_focus: 0.55,
+        deep: 0.0,
+        inv_near: 1.0,
+        inv_far: 0.0,
+        rom_bits: 10,
+        rom: Vec::new().into(),
         g: 12.0,
         z_far_edge: 0.5,
         z_near_edge: 0.4,
@@ -159,7 +166,14 @@ fn theorem_on_default_scene_for_several_p_and_composited_departure() {
     let scene = Scene::default_scene();
     let hw = HwConfig::default_config();
     let a = default_frame(&scene, &hw);
-    let lm = LensMap::from_camera(&scene.camera, 480, hw.visibility.z.format.frac_bits).unwrap();
+    let lm = LensMap::from_camera(
+        &scene.camera,
+        480,
+        hw.visibility.z.format.frac_bits,
+        hw.dof.sigma,
+        hw.dof.sigma_rom_bits,
+    )
+    .unwrap();
     let vf: Vec<f64> = a.frame.acc.iter().map(|&v| v as f64).collect();
     let img = DepthImage {
         width: 640,
@@ -596,7 +610,9 @@ fn quantised_lens_constants_agree_with_f64_round_on_the_embedded_scenes() {
     let mut lenses = 0;
     for name in ["default", "default-pinhole", "cone-focus"] {
         let scene = Scene::embedded(name).unwrap();
-        let Some(lm) = LensMap::from_camera(&scene.camera, scene.image.height, zf) else {
+        let Some(lm) =
+            LensMap::from_camera(&scene.camera, scene.image.height, zf, SigmaForm::Affine, 10)
+        else {
             assert_eq!(name, "default-pinhole");
             continue;
         };
@@ -639,6 +655,87 @@ fn quantised_lens_constants_agree_with_f64_round_on_the_embedded_scenes() {
     assert_eq!(lenses, 2);
 }
 
+/// The paper's blur (`dof.sigma = "paper"`, the default): the sigma ROM holds
+/// `K (1/U - 1/(D - deep))` beyond the in-focus band and `K (1/U - 1/(D + deep))` before it,
+/// rounded to 1/256 px; the background reads `K/U` (3.956 px on the default scene); the
+/// interpolated code of every depth code in the frame is within a small bound of the exact
+/// formula and monotone in depth.
+#[test]
+fn paper_sigma_rom_holds_the_papers_blur_and_the_background_at_k_over_u() {
+    let hw = HwConfig::default_config();
+    assert_eq!(hw.dof.sigma, SigmaForm::Paper);
+    let zf = hw.visibility.z.format.frac_bits;
+    for name in ["default", "cone-focus"] {
+        let scene = Scene::embedded(name).unwrap();
+        let cam = &scene.camera;
+        let Lens::ThinLens {
+            lens_radius: r,
+            focus_distance: u,
+            deep,
+            ..
+        } = cam.lens
+        else {
+            panic!("{name} has a thin lens")
+        };
+        let h = scene.image.height as f64;
+        let k = r * h / (2.0 * (cam.fov_y_deg.to_radians() / 2.0).tan());
+        let lm = LensMap::from_camera(cam, scene.image.height, zf, SigmaForm::Paper, 10).unwrap();
+        let paper = |d: f64| {
+            if d > u + deep {
+                k * (1.0 / u - 1.0 / (d - deep))
+            } else if d < u - deep {
+                k * (1.0 / u - 1.0 / (d + deep))
+            } else {
+                0.0
+            }
+        };
+        let rom = lm.sigma_rom();
+        assert_eq!(rom.len(), 1024 + 2, "{name}");
+        let mut exact = 0;
+        for (j, &e) in rom[..=1024].iter().enumerate() {
+            let want = paper(depth_from_screen_z(cam, j as f64 / 1024.0)) * 256.0;
+            assert!(
+                (e as f64 - want).abs() <= 0.5 + 1e-9,
+                "{name} entry {j}: {e} vs {want}"
+            );
+            exact += usize::from(e == want.round() as i64);
+        }
+        assert!(
+            exact >= 1020,
+            "{name}: {exact} entries are the rounded formula"
+        );
+        let bg = lm.sigma_code(u32::MAX) as f64 / 256.0;
+        assert!(
+            (bg - k / u).abs() <= 0.5 / 256.0,
+            "{name}: background {bg} vs K/U {}",
+            k / u
+        );
+        if name == "default" {
+            assert!((bg - 3.956).abs() < 0.03, "background sigma {bg}");
+        }
+        let a = default_frame(&scene, &hw);
+        let mut keys = a.frame.depth.clone();
+        keys.sort_unstable();
+        keys.dedup();
+        let (mut worst, mut last) = (0.0f64, i64::MIN);
+        for &key in &keys {
+            let c = lm.sigma_code(key);
+            assert!(c >= last, "{name}: sigma not monotone at depth code {key}");
+            last = c;
+            if key != u32::MAX {
+                let want = paper(depth_from_screen_z(cam, lm.z_of(key)));
+                worst = worst.max((c as f64 / 256.0 - want).abs());
+            }
+        }
+        eprintln!(
+            "{name}: sigma ROM 1026 x {} bits, worst interpolation error over {} depth codes {worst:.4} px",
+            lm.sigma_rom_bits_wide(),
+            keys.len()
+        );
+        assert!(worst < 0.02, "{name}: {worst} px");
+    }
+}
+
 #[test]
 fn quantised_lens_constants_agree_with_f64_round_at_the_format_edges() {
     let z24 = |z: f64| LensMap {
@@ -648,6 +745,7 @@ fn quantised_lens_constants_agree_with_f64_round_at_the_format_edges() {
         z_inf: 1.0 / (1.0 - 2.0 / 50.0),
         z_frac: 24,
         coc_px: 1.0,
+        ..lens()
     };
     let cases = [
         // G = 2 - 2^-20 rounds up to 2.0 (code 131072): one integer bit more than G's floor.

@@ -4,7 +4,7 @@
 //! the commit. The host front end uses f64 trigonometry and the LUTs `powf`: the hashes are
 //! those of x86_64 Linux with this toolchain (the CI machine).
 
-use igemu::config::HwConfig;
+use igemu::config::{HwConfig, SigmaForm};
 use igemu::pipeline::render;
 use igemu::scene::Scene;
 use igemu::stage::RunOptions;
@@ -20,13 +20,14 @@ fn fnv(codes: &[u16]) -> u64 {
 }
 
 fn check(scene: &str, preset: &str, expected: u64) {
+    check_with(scene, preset, |_| {}, expected);
+}
+
+fn check_with(scene: &str, preset: &str, edit: impl FnOnce(&mut HwConfig), expected: u64) {
     let s = Scene::embedded(scene).expect("embedded scene");
-    let r = render(
-        &s,
-        &HwConfig::preset(preset).expect("preset"),
-        RunOptions::FAST,
-    )
-    .expect("render");
+    let mut hw = HwConfig::preset(preset).expect("preset");
+    edit(&mut hw);
+    let r = render(&s, &hw, RunOptions::FAST).expect("render");
     let got = fnv(&r.dac);
     if got != expected {
         std::fs::create_dir_all("tests/output").ok();
@@ -43,12 +44,31 @@ fn default_pinhole_linear12() {
     check("default-pinhole", "linear12", 0x910e_fa47_6b30_86f8);
 }
 
+/// The paper's blur formula (`dof.sigma = "paper"`, the default since it replaced the
+/// affine form): the background blurs at K/U = 3.956 px instead of 3.35.
 #[test]
 fn default_linear12_with_depth_of_field() {
-    check("default", "linear12", 0x4357_099f_3035_4706);
+    check("default", "linear12", 0x88fa_2770_d7b0_81bc);
+}
+
+/// The first version's affine blur form keeps the first version's DAC codes.
+#[test]
+fn default_linear12_with_depth_of_field_affine_sigma() {
+    check_with(
+        "default",
+        "linear12",
+        |h| h.dof.sigma = SigmaForm::Affine,
+        0x4357_099f_3035_4706,
+    );
 }
 
 #[test]
 fn default_pinhole_log8_logadd() {
     check("default-pinhole", "log8-logadd", 0x3390_614d_8895_3ab3);
+}
+
+/// Focus on the cone (the paper's Fig. 3c), the paper's blur.
+#[test]
+fn cone_focus_linear12_with_depth_of_field() {
+    check("cone-focus", "linear12", 0xaf85_9917_b6e8_1ddf);
 }

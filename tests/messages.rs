@@ -142,6 +142,9 @@ kind = "none"
 frac_bits = 4
 
 [dof]
+kind = "layered"
+sigma = "paper"
+sigma_rom_bits = 10
 p = 0.1
 max_half_size = 32
 
@@ -889,6 +892,27 @@ const HW_CASES: &[Case] = &[
     ),
     c("p = 0.1", "p = nan", "dof.p", "", "(0, 1)"),
     c(
+        "kind = \"layered\"",
+        "kind = \"gaussian\"",
+        "dof.kind",
+        "",
+        "allowed: `layered`, `luminance`, `downsample`",
+    ),
+    c(
+        "sigma = \"paper\"",
+        "sigma = 3",
+        "dof.sigma",
+        "",
+        "\"paper\", \"affine\"",
+    ),
+    c(
+        "sigma_rom_bits = 10",
+        "sigma_rom_bits = 30",
+        "dof.sigma_rom_bits",
+        "",
+        "4..=16",
+    ),
+    c(
         "max_half_size = 32",
         "max_half_size = 1000",
         "dof.max_half_size",
@@ -1110,6 +1134,7 @@ fn hints_and_validation_agree() {
         ("coding.log_bits", "log_bits = 2", "3..=12"),
         ("dither.frac_bits", "frac_bits = 0", "1..=8"),
         ("dof.max_half_size", "max_half_size = 65", "1..=64"),
+        ("dof.sigma_rom_bits", "sigma_rom_bits = 17", "4..=16"),
     ] {
         let hint = HwConfig::field_hint(path).unwrap();
         assert!(hint.contains(range), "{path}: {hint}");

@@ -14,7 +14,7 @@ use crate::config::HwConfig;
 use crate::error::{Error, FileError, Result};
 use crate::hdl::bench::{Bench, Rng};
 use crate::pipeline;
-use crate::scene::Scene;
+use crate::scene::{Lens, Scene};
 use crate::stage::dof::{
     DepthImage, LayerPlanes, LensMap, border_sum, layered_fixed_observed, plan_layers, row_mac,
 };
@@ -31,7 +31,7 @@ fn bits(v: u128) -> u32 {
 pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
     let p = &hw.dof;
     let z_frac = hw.visibility.z.format.frac_bits;
-    if LensMap::from_camera(&scene.camera, 1, z_frac).is_none() {
+    if !matches!(scene.camera.lens, Lens::ThinLens { .. }) {
         return Err(Error::File(FileError {
             file: scene.name.clone(),
             line: None,
@@ -53,8 +53,14 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     let (_, taps) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Accumulate)?;
     let frame = &taps.fixed.frame().frame;
     let (w, h) = (frame.width as usize, frame.height as usize);
-    let lens = LensMap::from_camera(&scene.camera, frame.height, z_frac)
-        .expect("a thin-lens camera, checked above");
+    let lens = LensMap::from_camera(
+        &scene.camera,
+        frame.height,
+        z_frac,
+        p.sigma,
+        p.sigma_rom_bits,
+    )
+    .expect("a thin-lens camera, checked above");
     let n2 = hw.raster.samples * hw.raster.samples;
     let plan = plan_layers(&frame.depth, &frame.coverage, n2, &lens, p)
         .map_err(|m| bad(hw, "dof.max_half_size", m))?;

@@ -2,7 +2,7 @@
 
 use super::layers::LayerPlan;
 use super::lens::LensMap;
-use crate::config::DofCfg;
+use crate::config::{DofCfg, SigmaForm};
 use crate::fixed::{QFormat, SignalStats};
 use crate::stage::{Cost, MemImage, Memory, Unit};
 use std::sync::Arc;
@@ -13,9 +13,58 @@ pub const LINE_BUFFERS: &str = "dof line buffers";
 pub const COMPOSITE: &str = "dof composite buffer";
 /// Name of the coefficient ROM.
 pub const COEF_ROM: &str = "dof coefficient ROM";
+/// Name of the sigma ROM (the paper's blur form).
+pub const SIGMA_ROM: &str = "dof sigma ROM";
 
-/// Cost of the datapath: line buffers for the largest mask, the composite buffer, the
-/// coefficient ROM and the arithmetic units by width.
+/// Cost of the blur per depth code: the sigma ROM and its interpolating multiplier (the
+/// paper form) or one `z x G` multiplier (the affine form).
+pub fn lens_cost(lens: &LensMap) -> Cost {
+    match lens.form {
+        SigmaForm::Paper => {
+            let width = lens.sigma_rom_bits_wide();
+            let frac = lens.z_frac.saturating_sub(lens.rom_bits);
+            let mut muls = vec![];
+            if frac > 0 {
+                muls.push(Unit::mul("sigma ROM interpolation", 1, width + 1, frac));
+            }
+            Cost::new(
+                vec![Memory::rom(SIGMA_ROM, lens.sigma_rom().len() as u64, width)],
+                vec![Unit::adder("sigma ROM interpolation", 1, width + 1)],
+                muls,
+            )
+        }
+        SigmaForm::Affine => Cost::new(
+            vec![],
+            vec![],
+            vec![Unit::mul(
+                "sigma = G (z - z_e)",
+                1,
+                lens.z_frac + 1,
+                lens.g_bits(),
+            )],
+        ),
+    }
+}
+
+/// The sigma ROM's contents (two's complement entries), or none (the affine form).
+pub fn sigma_rom_image(lens: &LensMap) -> Option<MemImage> {
+    let rom = lens.sigma_rom();
+    if rom.is_empty() {
+        return None;
+    }
+    let width = lens.sigma_rom_bits_wide();
+    let mask = if width >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << width) - 1
+    };
+    let words: Vec<u64> = rom.iter().map(|&c| c as u64 & mask).collect();
+    Some(MemImage::table(SIGMA_ROM, width, Arc::new(words)))
+}
+
+/// Cost of the layered datapath: line buffers for the largest mask, the composite buffer,
+/// the coefficient ROM and the arithmetic units by width, plus the blur per depth code
+/// ([`lens_cost`]).
 pub fn cost(
     plan: &LayerPlan,
     p: &DofCfg,
@@ -52,7 +101,6 @@ pub fn cost(
             ),
         ],
         vec![
-            Unit::mul("sigma = G (z - z_e)", 1, lens.z_frac + 1, lens.g_bits()),
             Unit::mul("premultiply x * coverage", 1, code_bits, a_bits),
             Unit::mul("horizontal taps", taps, xm_bits, p.coef_bits + 1),
             Unit::mul("vertical taps", taps, p.line_bits, p.coef_bits + 1),
@@ -71,6 +119,7 @@ pub fn cost(
             ),
         ],
     )
+    .merge(lens_cost(lens))
 }
 
 /// The coefficient ROM's contents: per layer (far to near) the centre tap and the taps on

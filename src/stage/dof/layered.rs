@@ -100,7 +100,9 @@ impl Method for Layered {
         )
     }
 
-    fn memories(&self, cx: &Cx, plan: &LayerPlan, _: &LensMap) -> Vec<MemImage> {
-        vec![super::coefficient_image(plan, &cx.hw.dof)]
+    fn memories(&self, cx: &Cx, plan: &LayerPlan, lens: &LensMap) -> Vec<MemImage> {
+        let mut m = vec![super::coefficient_image(plan, &cx.hw.dof)];
+        m.extend(super::sigma_rom_image(lens));
+        m
     }
 }

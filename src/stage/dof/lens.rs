@@ -1,19 +1,41 @@
 //! The thin-lens blur as a function of the depth code (docs/reference.md §2a, §2b): the
-//! [`LensMap`] constants and the per-pixel sigma code `sigma = G (z - z_e)`.
+//! [`LensMap`] constants and the sigma code of a depth code, in one of two forms
+//! ([`SigmaForm`]): the paper's (the object distance shifted by `deep` toward the focus,
+//! read from a sigma ROM indexed by the top depth bits, interpolated) or the affine one
+//! (the depth shifted in inverse depth, `sigma = G (z - z_e)`, one multiply).
 
+use crate::config::SigmaForm;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
 use crate::scene::{Camera, Lens, screen_z};
 use serde::Serialize;
+use std::sync::Arc;
 
 /// Fraction bits of the per-pixel sigma code (pixels): `sigma = code * 2^-8`.
 pub const SIGMA_FRAC: u32 = 8;
 /// Fraction bits of the slope constant G (pixels per unit of screen z).
 pub const G_FRAC: u32 = 16;
 
-/// The thin-lens blur as a function of the depth code: `sigma = G (z - z_e)`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+/// The thin-lens blur as a function of the depth code.
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct LensMap {
-    /// Pixels of sigma per unit of screen z.
+    /// How sigma is computed from the depth code.
+    pub form: SigmaForm,
+    /// `K = R H / (2 tan(fov/2))`: sigma in pixels is `K (1/U - 1/D)` before the band shift.
+    pub k: f64,
+    /// `1/U`, the inverse focus distance.
+    pub inv_focus: f64,
+    /// Half-width `deep` of the in-focus band, in scene units.
+    pub deep: f64,
+    /// `1/near`.
+    pub inv_near: f64,
+    /// `1/far`.
+    pub inv_far: f64,
+    /// Depth-code bits that index the sigma ROM (the paper form).
+    pub rom_bits: u32,
+    /// The sigma ROM (paper form; empty for the affine form), see [`LensMap::sigma_rom`].
+    #[serde(skip)]
+    pub rom: Arc<[i64]>,
+    /// Pixels of sigma per unit of screen z (the affine form's slope `K (1/near - 1/far)`).
     pub g: f64,
     /// Screen z of the far edge of the in-focus band.
     pub z_far_edge: f64,
@@ -28,8 +50,15 @@ pub struct LensMap {
 }
 
 impl LensMap {
-    /// From a thin-lens camera and the image height; `None` for a pinhole camera.
-    pub fn from_camera(cam: &Camera, height: u32, z_frac: u32) -> Option<Self> {
+    /// From a thin-lens camera, the image height, the depth codes' fraction bits, the sigma
+    /// form and the sigma ROM's index bits; `None` for a pinhole camera.
+    pub fn from_camera(
+        cam: &Camera,
+        height: u32,
+        z_frac: u32,
+        form: SigmaForm,
+        rom_bits: u32,
+    ) -> Option<Self> {
         let Lens::ThinLens {
             focal_length,
             lens_radius,
@@ -44,14 +73,24 @@ impl LensMap {
         let k = lens_radius * height as f64 / (2.0 * tan);
         let g = k * (1.0 / cam.near - 1.0 / cam.far);
         let v0 = focal_length * focus_distance / (focus_distance - focal_length);
-        Some(Self {
+        let mut lens = Self {
+            form,
+            k,
+            inv_focus: 1.0 / focus_distance,
+            deep,
+            inv_near: 1.0 / cam.near,
+            inv_far: 1.0 / cam.far,
+            rom_bits,
             g,
             z_far_edge: screen_z(cam, focus_distance + deep),
             z_near_edge: screen_z(cam, (focus_distance - deep).max(cam.near)).max(0.0),
             z_inf: 1.0 / (1.0 - cam.near / cam.far),
             z_frac,
             coc_px: coc * height as f64 / (2.0 * v0 * tan),
-        })
+            rom: Arc::from(Vec::new()),
+        };
+        lens.rom = lens.build_rom();
+        Some(lens)
     }
 
     /// Screen z of a depth code.
@@ -63,14 +102,38 @@ impl LensMap {
         }
     }
 
-    /// Exact sigma (pixels, signed: negative in front of the focus) at screen z.
+    /// Inverse view depth `1/D` at screen z (0 at the background's `z_inf`, never negative).
+    fn inv_depth(&self, z: f64) -> f64 {
+        (self.inv_near - z * (self.inv_near - self.inv_far)).max(0.0)
+    }
+
+    /// Exact sigma (pixels, signed: negative in front of the focus) at screen z, in the
+    /// configured form.
     pub fn sigma_z(&self, z: f64) -> f64 {
-        if z > self.z_far_edge {
-            self.g * (z - self.z_far_edge)
-        } else if z < self.z_near_edge {
-            self.g * (z - self.z_near_edge)
-        } else {
-            0.0
+        match self.form {
+            SigmaForm::Affine => {
+                if z > self.z_far_edge {
+                    self.g * (z - self.z_far_edge)
+                } else if z < self.z_near_edge {
+                    self.g * (z - self.z_near_edge)
+                } else {
+                    0.0
+                }
+            }
+            SigmaForm::Paper => {
+                // D shifted by deep toward the focus: 1/(D -+ deep) = w / (1 -+ deep w).
+                let w = self.inv_depth(z);
+                let u = self.inv_focus;
+                let beyond = 1.0 / (1.0 / u + self.deep);
+                let before = 1.0 / (1.0 / u - self.deep);
+                if w < beyond {
+                    self.k * (u - w / (1.0 - self.deep * w))
+                } else if self.deep * u < 1.0 && w > before {
+                    self.k * (u - w / (1.0 + self.deep * w))
+                } else {
+                    0.0
+                }
+            }
         }
     }
 
@@ -79,9 +142,10 @@ impl LensMap {
         self.sigma_z(self.z_of(key))
     }
 
-    /// Circle of confusion in pixels at a depth code, without the in-focus band: `2 |sigma|`.
+    /// Circle of confusion in pixels at a depth code, without the in-focus band: the blur
+    /// circle's diameter `2 K |1/U - 1/D|` of the thin lens.
     pub fn coc_f64(&self, key: u32) -> f64 {
-        2.0 * self.g * (self.z_of(key) - (self.z_far_edge + self.z_near_edge) / 2.0).abs()
+        2.0 * self.k * (self.inv_focus - self.inv_depth(self.z_of(key))).abs()
     }
 
     /// The quantiser of the slope constant G: `UQ<i>.16` (`G_FRAC` fraction bits, `i` the
@@ -114,11 +178,24 @@ impl LensMap {
         self.z_quantizer().quantize_f64(z).code
     }
 
-    /// Fixed-point sigma code (`SIGMA_FRAC` fraction bits, signed): one `z x G` multiply and
-    /// a round-to-nearest shift (RND, the shared `round_shift`) of the exact product, with the
+    /// Fixed-point sigma code (`SIGMA_FRAC` fraction bits, signed) of a depth code
+    /// (`u32::MAX`: the background at infinity). Affine form: one `z x G` multiply and a
+    /// round-to-nearest shift (RND, the shared `round_shift`) of the exact product, with the
     /// constants as the hardware holds them ([`LensMap::z_quantizer`],
-    /// [`LensMap::g_quantizer`]; the model quantises them on every call).
+    /// [`LensMap::g_quantizer`]; the model quantises them on every call). Paper form: the
+    /// sigma ROM ([`LensMap::sigma_rom`]) read at the top `rom_bits` of the code and
+    /// interpolated linearly with the remaining bits (one multiply, RND shift); a code
+    /// beyond the far plane (a layer's middle depth toward infinity) interpolates between
+    /// the far-plane entry and the infinity entry.
     pub fn sigma_code(&self, key: u32) -> i64 {
+        match self.form {
+            SigmaForm::Affine => self.sigma_code_affine(key),
+            SigmaForm::Paper => self.sigma_code_rom(key),
+        }
+    }
+
+    /// The affine form: `(z - z_e) G`, exact, rounded.
+    fn sigma_code_affine(&self, key: u32) -> i64 {
         let zq = self.z_quantizer();
         let code = |z: f64| zq.quantize_f64(z).code;
         let z = if key == u32::MAX {
@@ -138,10 +215,79 @@ impl LensMap {
         round_shift(d as i128 * g, self.z_frac + G_FRAC - SIGMA_FRAC, Quant::Rnd) as i64
     }
 
+    /// The sigma ROM of the paper form: `2^rom_bits + 1` entries, the sigma code at screen
+    /// z = `j / 2^rom_bits` (the last at the far plane), then one entry for infinity (the
+    /// background); each through [`LensMap::sigma_rom_quantizer`]. Empty for the affine form.
+    pub fn sigma_rom(&self) -> &[i64] {
+        &self.rom
+    }
+
+    fn build_rom(&self) -> Arc<[i64]> {
+        if self.form == SigmaForm::Affine {
+            return Arc::from(Vec::new());
+        }
+        let n = 1u64 << self.rom_bits;
+        let q = self.sigma_rom_quantizer();
+        (0..=n)
+            .map(|j| self.sigma_z(j as f64 / n as f64))
+            .chain([self.sigma_z(self.z_inf)])
+            .map(|s| q.quantize_f64(s).code)
+            .collect()
+    }
+
+    /// The quantiser of the sigma ROM entries: `Q<i>.8` ([`SIGMA_FRAC`] fraction bits; `i`
+    /// fitted to the extremes of sigma, at the near plane, the far plane and infinity, with a
+    /// sign bit when the near plane lies before the in-focus band), RND_INF, SAT (the
+    /// format holds every entry: sigma is monotone on each side of the band).
+    pub fn sigma_rom_quantizer(&self) -> Quantizer {
+        fitted(SIGMA_FRAC, &[0.0, 1.0, self.z_inf].map(|z| self.sigma_z(z)))
+    }
+
+    /// Width of a sigma ROM entry in bits.
+    pub fn sigma_rom_bits_wide(&self) -> u32 {
+        self.sigma_rom_quantizer().format.total_bits()
+    }
+
+    /// The paper form's sigma code: ROM entry at the top bits, linear interpolation.
+    fn sigma_code_rom(&self, key: u32) -> i64 {
+        let rom = &self.rom;
+        let n = 1i64 << self.rom_bits;
+        let inf = rom[rom.len() - 1];
+        if key == u32::MAX {
+            return inf;
+        }
+        let key = i64::from(key);
+        let one = 1i64 << self.z_frac;
+        if key >= one {
+            // Beyond the far plane: between the far-plane entry and infinity.
+            let span = self.z_code(self.z_inf) - one;
+            let far = rom[n as usize];
+            if span <= 0 {
+                return inf;
+            }
+            let t = (key - one).min(span);
+            return far + round_div(i128::from(inf - far) * i128::from(t), i128::from(span));
+        }
+        if self.z_frac <= self.rom_bits {
+            return rom[(key << (self.rom_bits - self.z_frac)) as usize];
+        }
+        let shift = self.z_frac - self.rom_bits;
+        let j = (key >> shift) as usize;
+        let f = key & ((1i64 << shift) - 1);
+        let (a, b) = (rom[j], rom[j + 1]);
+        a + round_shift(i128::from(b - a) * i128::from(f), shift, Quant::Rnd) as i64
+    }
+
     /// Width of the G constant in bits (integer + `G_FRAC`): its quantiser's format.
     pub fn g_bits(&self) -> u32 {
         self.g_quantizer().format.total_bits()
     }
+}
+
+/// `n / d` rounded to nearest, ties away from zero (`d > 0`).
+fn round_div(n: i128, d: i128) -> i64 {
+    let q = (2 * n.abs() + d) / (2 * d);
+    (if n < 0 { -q } else { q }) as i64
 }
 
 /// Rounding of the lens constants: RND_INF, to nearest with ties away from zero, which is

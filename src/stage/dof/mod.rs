@@ -5,13 +5,21 @@
 //! `V0 = F U / (U - F)`). The image plane `V0` behind the lens spans `2 V0 tan(fov/2)` units
 //! over the image height H, so in pixels `sigma_px = K (1/U - 1/D)` with
 //! `K = R H / (2 tan(fov/2))`: V0 and F cancel, and the scene's length unit is the unit of
-//! R and U. Screen z is affine in 1/D (`1/D = 1/near - z (1/near - 1/far)`), so sigma is
-//! affine in the pixel's depth code: `sigma = G (z - z_e)` with `G = K (1/near - 1/far)`;
-//! one multiplier per pixel. The in-focus band `[U - deep, U + deep]` has sigma = 0; outside
-//! it the depth is shifted to the band's edge *in inverse depth* (`z_e` is the screen z of
-//! `U + deep` behind the band and of `U - deep` in front of it), which keeps sigma
-//! continuous and affine in z. The circle of confusion (docs/reference.md §2b) of the same lens is
-//! `C = F^2/(U - F) |L - U| / (N L)` = `2 |sigma|` before the band, in the same units.
+//! R and U. The in-focus band `[U - deep, U + deep]` has sigma = 0; outside it the depth is
+//! shifted to the band's edge, in one of two forms (`dof.sigma`, [`LensMap`]):
+//! * `paper` (the default, the paper's eq. 3): D itself is shifted,
+//!   `sigma = K (1/U - 1/(D - deep))` beyond the band and `K (1/U - 1/(D + deep))` before
+//!   it; the background at infinity blurs at `K/U`. Not affine in the depth code, so the
+//!   hardware reads it from a sigma ROM of `2^sigma_rom_bits + 1` entries over screen z in
+//!   [0, 1] (plus one for infinity) and interpolates linearly with the code's low bits
+//!   (one multiply); entries are `Q<i>.8`, rounded RND_INF;
+//! * `affine` (the first version's): the depth is shifted in inverse depth (`z_e` is the
+//!   screen z of `U + deep` behind the band and of `U - deep` in front of it); screen z is
+//!   affine in 1/D (`1/D = 1/near - z (1/near - 1/far)`), so `sigma = G (z - z_e)` with
+//!   `G = K (1/near - 1/far)`: one multiplier per pixel, no ROM.
+//!
+//! The circle of confusion (docs/reference.md §2b) of the same lens is
+//! `C = F^2/(U - F) |L - U| / (N L)`, in pixels `2 K |1/U - 1/D|` (no band).
 //!
 //! **Mask.** The paper's Gaussian is read as `exp(-(x^2 + y^2) / sigma^2)`, the form for which
 //! its cut rule (edge/centre = k) gives exactly `M = ceil(sqrt(-ln k) |sigma|)` (1.731 sigma
@@ -24,7 +32,7 @@
 //! middle depth (and sigma = 0 when the layer straddles the focus) stays below P. Each layer
 //! is convolved with the mask of its middle depth.
 //!
-//! **Fixed-point constants** ([`LensMap`]), each through a shared
+//! **Fixed-point constants of the affine form** ([`LensMap`]), each through a shared
 //! [`Quantizer`](crate::fixed::Quantizer) with mode RND_INF (to nearest, ties away from
 //! zero: `f64::round` for every sign) and overflow SAT, in a format fitted to the constant
 //! (the fewest integer bits that hold it after rounding), so SAT does not act (below a 62-bit
@@ -37,9 +45,10 @@
 //!   integer bits of `z_inf = 1 / (1 - near/far) > 1` (`UQ1.24` with the default `UQ0.24`
 //!   z buffer); signed `Q<i+1>.<z_frac>` when the band's far edge lies before the near plane.
 //!
-//! The per-pixel sigma code is signed `Q<i>.8` ([`SIGMA_FRAC`] fraction bits): the product
+//! The sigma code is signed `Q<i>.8` ([`SIGMA_FRAC`] fraction bits): affine, the product
 //! `(z - z_e) G`, exact, rounded by the shared `round_shift` with RND over `z_frac + 8` bits;
-//! it is not saturated (`i` follows the largest |sigma|; a layer whose mask would exceed
+//! paper, the ROM entry plus the interpolation product rounded by `round_shift` (RND). It is
+//! not saturated (`i` follows the largest |sigma|; a layer whose mask would exceed
 //! `dof.max_half_size` stops the plan with an error).
 //!
 //! **Fixed-point datapath** (per layer, only over the layer's bounding box plus M):
@@ -72,10 +81,12 @@
 //! summed; cost `O(N^2 M^2)`. [`additive_layered`] is the theorem's form: every pixel
 //! spread with its layer's middle mask, summed, no compositing.
 //!
-//! Files: `lens` (blur per depth code), `mask` (taps, difference degree), `layers` (the layer
-//! plan), `fixed` (the fixed datapath, `row_mac`), `float` (the layered float reference),
-//! `reference` (per-pixel scatter, theorem form, error split), `cost` (cost, memories,
-//! signals), `stage` (the stage contract).
+//! Files: `lens` (blur per depth code, the sigma ROM), `mask` (taps, difference degree),
+//! `method` (the interface of the methods behind `dof.kind`), `layered` (the layered method
+//! through it), `layers` (the layer plan), `fixed` (the fixed datapath, `row_mac`), `float`
+//! (the layered float reference), `reference` (per-pixel scatter, theorem form, error split,
+//! depth-edge bands), `potentiate` (a log-coded frame made linear for DoF), `cost` (cost,
+//! memories, signals), `stage` (the stage contract).
 
 mod cost;
 pub mod downsample;
@@ -86,11 +97,13 @@ mod layers;
 mod lens;
 mod mask;
 mod method;
+mod potentiate;
 mod reference;
 mod stage;
 
 pub use cost::{
-    COEF_ROM, COMPOSITE, LINE_BUFFERS, coefficient_image, cost, overflow_signal, overflow_signal_in,
+    COEF_ROM, COMPOSITE, LINE_BUFFERS, SIGMA_ROM, coefficient_image, cost, lens_cost,
+    overflow_signal, overflow_signal_in, sigma_rom_image,
 };
 pub use fixed::{
     DofWork, LayerPlanes, MacOut, border_sum, layered_fixed, layered_fixed_observed, row_mac,
@@ -100,6 +113,7 @@ pub use layers::{DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layer
 pub use lens::{G_FRAC, LensMap, SIGMA_FRAC};
 pub use mask::{difference_degree, half_size, mask_difference, taps_f64, taps_fixed};
 pub use method::Method;
+pub use potentiate::{FramePotentiation, POT_LUT};
 pub use reference::{
     RegionError, additive_layered, depth_edge_band, edge_band, local_error, per_pixel_scatter,
     region_error, weber_linear,

@@ -7,6 +7,7 @@
 use super::downsample::{DownPlan, Downsample};
 use super::layered::Layered;
 use super::method::{Method, n2};
+use super::potentiate::FramePotentiation;
 use super::{
     DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, depth_edge_band,
     difference_degree, edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
@@ -43,11 +44,13 @@ macro_rules! with_method {
     };
 }
 
-/// What the fixed model leaves: the lens, the method's plan, and the frame it blurred.
+/// What the fixed model leaves: the lens, the method's plan, the linear frame it blurred
+/// and, after a log-coded frame, the potentiation LUT that made it linear.
 pub struct Blurred {
     lens: LensMap,
     plan: MethodPlan,
     input: Arc<FrameTap>,
+    pot: Option<FramePotentiation>,
 }
 
 impl Blurred {
@@ -92,18 +95,6 @@ impl Stage for Dof {
         else {
             return Ok(Need::no("pinhole camera: everything is in focus"));
         };
-        if hw.coding.kind == CodingKind::LogAdd {
-            return Err(Error::File(FileError {
-                file: hw.name.clone(),
-                line: None,
-                col: None,
-                field: "coding.kind".into(),
-                msg: format!(
-                    "log-add keeps a log-coded frame memory, but scene `{}` has a thin lens and depth of field needs a linear frame; use log-potentiate, or a pinhole scene (e.g. the embedded `default-pinhole`)",
-                    scene.name
-                ),
-            }));
-        }
         let method = match hw.dof.kind {
             DofKind::Layered => format!("layered blur of the frame, threshold P = {}", hw.dof.p),
             DofKind::Downsample => format!(
@@ -123,8 +114,13 @@ impl Stage for Dof {
                 }));
             }
         };
+        let log = if hw.coding.kind == CodingKind::LogAdd {
+            " (the log-coded frame potentiated into it by a LUT)"
+        } else {
+            ""
+        };
         Ok(Need::yes(format!(
-            "thin lens (radius {lens_radius}, focus at {focus_distance}, sigma {}): {method}",
+            "thin lens (radius {lens_radius}, focus at {focus_distance}, sigma {}): {method}{log}",
             hw.dof.sigma.name()
         )))
     }
@@ -138,16 +134,31 @@ impl Stage for Dof {
 
     fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(Blurred, Facts)> {
         let hw = cx.hw;
-        let input = taps
+        let stored = taps
             .fixed
             .frame
             .clone()
             .expect("accumulate wrote the frame");
+        let (input, pot) = match &stored.coding {
+            FrameCoding::Linear => (stored, None),
+            FrameCoding::Log(add) => {
+                let pot = FramePotentiation::build(add, hw.accumulate.frame.format);
+                let mut frame = stored.frame.clone();
+                frame.acc = pot.apply(&frame.acc);
+                let linear = FrameTap {
+                    frame,
+                    coding: FrameCoding::Linear,
+                };
+                (Arc::new(linear), Some(pot))
+            }
+        };
         let frame = &input.frame;
         let lens = LensMap::from_camera(
             &cx.scene.camera,
             frame.height,
             hw.visibility.z.format.frac_bits,
+            hw.dof.sigma,
+            hw.dof.sigma_rom_bits,
         )
         .expect("the plan runs dof for a thin lens only");
         let (plan, out, mut facts) = match hw.dof.kind {
@@ -155,6 +166,10 @@ impl Stage for Dof {
             DofKind::Downsample => run(&Downsample, cx, frame, &lens, MethodPlan::Downsample)?,
             DofKind::Luminance => unreachable!("refused by the plan"),
         };
+        if let Some(pot) = &pot {
+            facts.work.push(("potentiations", frame.acc.len() as u64));
+            facts.signals.push(pot.stats.clone());
+        }
         // Blur facts.
         let (mut sig_min, mut sig_max) = (f64::INFINITY, f64::NEG_INFINITY);
         let (mut in_focus, mut coc_max) = (0u64, 0.0f64);
@@ -171,7 +186,7 @@ impl Stage for Dof {
                 in_focus += 1;
             }
         }
-        facts.note("lens", lens);
+        facts.note("lens", &lens);
         facts.note(
             "object_sigma_px",
             serde_json::json!({"min": sig_min, "max": sig_max, "background": lens.sigma_f64(u32::MAX)}),
@@ -184,7 +199,15 @@ impl Stage for Dof {
             frame: next,
             coding: FrameCoding::Linear,
         }));
-        Ok((Blurred { lens, plan, input }, facts))
+        Ok((
+            Blurred {
+                lens,
+                plan,
+                input,
+                pot,
+            },
+            facts,
+        ))
     }
 
     /// (1) The same method in f64 on the float frame; with `dof_reference` also (2) the
@@ -231,11 +254,17 @@ impl Stage for Dof {
     }
 
     fn cost(&self, cx: &Cx, b: &Blurred) -> Cost {
-        with_method!(&b.plan, |m, plan| m.cost(cx, plan, &b.lens))
+        let c = with_method!(&b.plan, |m, plan| m.cost(cx, plan, &b.lens));
+        match &b.pot {
+            Some(pot) => c.merge(pot.cost()),
+            None => c,
+        }
     }
 
     fn memories(&self, cx: &Cx, b: &Blurred, _: &Taps) -> Vec<MemImage> {
-        with_method!(&b.plan, |m, plan| m.memories(cx, plan, &b.lens))
+        let mut m = with_method!(&b.plan, |m, plan| m.memories(cx, plan, &b.lens));
+        m.extend(b.pot.as_ref().map(FramePotentiation::image));
+        m
     }
 }
 
