@@ -99,11 +99,14 @@ pub fn cost(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat, z_bits: u32) -> Cos
     )
 }
 
-/// The ROMs' contents (names as in [`cost`]): the offset ROM (two `offset_bits + 1`-bit
-/// two's complement fields per word), the blend ROM and the Gaussian's centre and one-side
-/// taps.
-pub fn memories(plan: &DownPlan, p: &DofCfg) -> Vec<MemImage> {
+/// The contents of the memories that hold more than transient values (names as in
+/// [`cost`]): the blurred small image (one small-format word per texel, as the fixed model
+/// left it), the offset ROM (two `offset_bits + 1`-bit two's complement fields per word),
+/// the blend ROM and the Gaussian's centre and one-side taps. The box accumulators, the
+/// Gaussian's line buffers and the blend window hold transient values and have none.
+pub fn memories(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat) -> Vec<MemImage> {
     let d = &p.downsample;
+    let sb = small_format(frame_fmt, d.guard_bits).total_bits();
     let words = Arc::new(plan.taps.rom_words());
     let offsets = MemImage {
         name: OFFSET_ROM.into(),
@@ -113,6 +116,7 @@ pub fn memories(plan: &DownPlan, p: &DofCfg) -> Vec<MemImage> {
         get: Arc::new(move |w, f| if f == 0 { words[w].0 } else { words[w].1 }),
     };
     vec![
+        MemImage::table(BLURRED, sb, plan.blurred.clone()),
         offsets,
         MemImage::table(
             BLEND_ROM,

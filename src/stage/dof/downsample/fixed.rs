@@ -31,6 +31,8 @@ pub struct DownWork {
     pub tap_overflows: u64,
     /// The output in the frame format (`dof.down.out`).
     pub out: SignalStats,
+    /// The blurred small image (small format codes, raster order).
+    pub blurred: Vec<u64>,
 }
 
 /// An overflow with overflow mode ERROR: the signal, its format and the rounded value.
@@ -167,6 +169,7 @@ pub fn downsample_fixed(
         blur: SignalStats::new("dof.down.blur", sfmt),
         tap_overflows: 0,
         out: SignalStats::new("dof.down.out", frame_fmt),
+        blurred: vec![],
     };
     // Small image and its two Gaussian passes.
     let (sw, sh) = (plan.small_width, plan.small_height);
@@ -261,5 +264,6 @@ pub fn downsample_fixed(
             out[i] = out_pt.put(num / den, out_frac)? as u32;
         }
     }
+    work.blurred = blurred;
     Ok((out, work))
 }

@@ -56,7 +56,7 @@ impl Method for Downsample {
         let p = &hw.dof;
         let frame_fmt = hw.accumulate.frame.format;
         let (w, h) = (frame.width as usize, frame.height as usize);
-        let plan = plan_downsample(&frame.depth, w, h, lens, p).map_err(|msg| {
+        let mut plan = plan_downsample(&frame.depth, w, h, lens, p).map_err(|msg| {
             Error::File(FileError {
                 file: hw.name.clone(),
                 line: None,
@@ -65,15 +65,15 @@ impl Method for Downsample {
                 msg,
             })
         })?;
-        let (out, work) = downsample_fixed(&frame.acc, &frame.depth, &plan, p, frame_fmt).map_err(
-            |(signal, format, value)| Error::Overflow {
+        let (out, mut work) = downsample_fixed(&frame.acc, &frame.depth, &plan, p, frame_fmt)
+            .map_err(|(signal, format, value)| Error::Overflow {
                 signal,
                 format: format.to_string(),
                 value,
                 min: format.min_code(),
                 max: format.max_code(),
-            },
-        )?;
+            })?;
+        plan.blurred = std::sync::Arc::new(std::mem::take(&mut work.blurred));
         let mut facts = Facts {
             work: vec![
                 ("pixels", frame.acc.len() as u64),
@@ -137,6 +137,6 @@ impl Method for Downsample {
     }
 
     fn memories(&self, cx: &Cx, plan: &DownPlan, _: &LensMap) -> Vec<MemImage> {
-        downsample_memories(plan, &cx.hw.dof)
+        downsample_memories(plan, &cx.hw.dof, cx.hw.accumulate.frame.format)
     }
 }

@@ -84,6 +84,10 @@ pub struct DownPlan {
     /// Largest distance (pixels, per axis) from a pixel to a sharp tap it reads: the blend
     /// window's half-height.
     pub reach: usize,
+    /// The blurred small image the fixed model left (small format codes, raster order):
+    /// the contents of the blurred-image RAM, for its memory image.
+    #[serde(skip)]
+    pub blurred: std::sync::Arc<Vec<u64>>,
 }
 
 impl DownPlan {
@@ -204,6 +208,7 @@ pub fn plan_downsample(
         },
         taps: Poisson::new(d.taps as usize, d.offset_bits),
         reach,
+        blurred: Default::default(),
     };
     let entry = |k: u32| DownPlan::rom_entry(blur.sigma_f64(k).abs(), smax_code, d.blend_bits);
     let mut rom: Vec<u64> = (0..=(1usize << rom_bits))
