@@ -89,6 +89,7 @@
 //! frame made linear for DoF), `cost` (cost, memories, signals), `stage` (the stage contract).
 
 mod cost;
+pub mod downsample;
 mod fixed;
 mod float;
 mod layered;

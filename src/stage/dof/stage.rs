@@ -4,6 +4,7 @@
 //! on request the per-pixel scatter and, for the layered method, the layer theorem check),
 //! the stage-local comparison, the method's cycle-model tokens, cost and ROMs.
 
+use super::downsample::{DownPlan, Downsample};
 use super::layered::Layered;
 use super::luminance::{LumPlan, Luminance};
 use super::method::{Method, n2};
@@ -13,7 +14,7 @@ use super::{
     difference_degree, edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
 };
 use crate::config::{CodingKind, DofKind, HwConfig};
-use crate::error::{Error, FileError, Result};
+use crate::error::Result;
 use crate::scene::{Lens, Scene};
 use crate::stage::accumulate::Frame;
 use crate::stage::taps::{FrameCoding, FrameTap, Taps};
@@ -26,6 +27,8 @@ pub enum MethodPlan {
     Layered(LayerPlan),
     /// `dof.kind = "luminance"`.
     Luminance(LumPlan),
+    /// `dof.kind = "downsample"`.
+    Downsample(DownPlan),
 }
 
 /// Runs `$body` with `$m` bound to the method and `$plan` to its plan.
@@ -38,6 +41,10 @@ macro_rules! with_method {
             }
             MethodPlan::Luminance($plan) => {
                 let $m = &Luminance;
+                $body
+            }
+            MethodPlan::Downsample($plan) => {
+                let $m = &Downsample;
                 $body
             }
         }
@@ -101,18 +108,10 @@ impl Stage for Dof {
                 "luminance-aware blur of the frame, pre-blur radius {}",
                 hw.dof.luminance.radius
             ),
-            k => {
-                return Err(Error::File(FileError {
-                    file: hw.name.clone(),
-                    line: None,
-                    col: None,
-                    field: "dof.kind".into(),
-                    msg: format!(
-                        "dof.kind = \"{}\" is not built yet; use \"layered\"",
-                        k.name()
-                    ),
-                }));
-            }
+            DofKind::Downsample => format!(
+                "downsample by {0}x{0}, Gaussian, blend by {1} Poisson-disc taps in the CoC",
+                hw.dof.downsample.factor, hw.dof.downsample.taps
+            ),
         };
         let log = if hw.coding.kind == CodingKind::LogAdd {
             " (the log-coded frame potentiated into it by a LUT)"
@@ -164,7 +163,7 @@ impl Stage for Dof {
         let (plan, out, mut facts) = match hw.dof.kind {
             DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
             DofKind::Luminance => run(&Luminance, cx, frame, &lens, MethodPlan::Luminance)?,
-            DofKind::Downsample => unreachable!("refused by the plan"),
+            DofKind::Downsample => run(&Downsample, cx, frame, &lens, MethodPlan::Downsample)?,
         };
         if let Some(pot) = &pot {
             facts.work.push(("potentiations", frame.acc.len() as u64));
@@ -304,6 +303,11 @@ fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
             let r = p.luminance.radius as usize + 1;
             let (k, c) = (&frame.depth, &frame.coverage);
             (depth_edge_band(w, h, k, c, n2(cx), &b.lens, r), r)
+        }
+        MethodPlan::Downsample(plan) => {
+            let r = plan.reach;
+            let band = depth_edge_band(w, h, &frame.depth, &frame.coverage, n2(cx), &b.lens, r);
+            (band, r)
         }
     };
     notes["composited_fixed"] = v(&region_error(&outf, &pp, &edge));
