@@ -388,13 +388,16 @@ fn random_hw(rng: &mut Rng) -> String {
     let frac = pick(&["1", "2", "3", "4"]);
     let p = pick(&["0.02", "0.1", "0.3", "0.9"]);
     let coef = pick(&["4", "8", "12", "20"]);
+    let kind = pick(&["layered", "luminance", "downsample"]);
+    let sigma = pick(&["paper", "affine"]);
+    let rom_bits = pick(&["4", "6", "10", "16"]);
     let tile = pick(&["4", "8", "16", "64", "256"]);
     let guard = pick(&["0", "1", "8", "64"]);
     format!(
         "preset = \"{preset}\"\n[raster]\nsamples = {samples}\nguard_band = {guard}\n[input]\ncoord = \"{coord}\"\nquant = \"{q1}\"\n\
          [accumulate]\nfilter = \"{filter}\"\nweight_bits = {weight_bits}\nframe = \"{frame}\"\nquant = \"{q2}\"\noverflow = \"{overflow}\"\n\
          [gamma]\ndac_bits = {dac}\n[dither]\nkind = \"{dither}\"\nplacement = \"{placement}\"\nfrac_bits = {frac}\n\
-         [dof]\np = {p}\ncoef_bits = {coef}\n[cycles]\ntile = {tile}\n"
+         [dof]\nkind = \"{kind}\"\nsigma = \"{sigma}\"\nsigma_rom_bits = {rom_bits}\np = {p}\ncoef_bits = {coef}\n[cycles]\ntile = {tile}\n"
     )
 }
 

@@ -5,7 +5,7 @@
 mod downsample;
 mod luminance;
 
-pub use downsample::{DownsampleCfg, RawDownsample};
+pub use downsample::{DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, DownsampleCfg, LeakGuard, RawDownsample};
 pub use luminance::{LuminanceCfg, RawLuminance};
 
 use super::set;

@@ -3,7 +3,23 @@
 use super::fixed::{border_sums, share};
 use super::layers::{DepthImage, LayerPlan, layer_box};
 
-/// Float reference (1): the same layers and masks (float taps), f64 arithmetic.
+/// The float taps on the fixed mask's support (taps that quantise to 0 are 0), renormalised
+/// to sum 1. The support decides which layers reach a pixel and hence which one fills it
+/// first (the normalised convolution's hole fill); a float tap of 1e-5 where the hardware's
+/// is 0 would otherwise pick a different back layer and move the pixel by hundreds of LSBs
+/// (a depth ramp crossing thin layers, docs/dof.md).
+fn on_fixed_support(tf: &[f64], t: &[u64]) -> Vec<f64> {
+    let kept: Vec<f64> = tf
+        .iter()
+        .zip(t)
+        .map(|(&v, &q)| if q == 0 { 0.0 } else { v })
+        .collect();
+    let sum: f64 = kept.iter().sum();
+    kept.into_iter().map(|v| v / sum).collect()
+}
+
+/// Float reference (1): the same layers and masks (float taps on the fixed taps' support),
+/// f64 arithmetic.
 pub fn layered_f64(img: &DepthImage<f64>, plan: &LayerPlan) -> Vec<f64> {
     let (w, h) = (img.width, img.height);
     let mut out = vec![0.0f64; w * h];
@@ -14,7 +30,7 @@ pub fn layered_f64(img: &DepthImage<f64>, plan: &LayerPlan) -> Vec<f64> {
             continue;
         };
         let (bw, bh) = (x1 - x0, y1 - y0);
-        let c = &layer.coef_f;
+        let c = &on_fixed_support(&layer.coef_f, &layer.coef);
         let m = layer.m as i64;
         let wx = border_sums(c, w);
         let wy = border_sums(c, h);

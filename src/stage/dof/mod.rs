@@ -83,17 +83,19 @@
 //!
 //! Files: `lens` (blur per depth code, the sigma ROM), `mask` (taps, difference degree),
 //! `method` (the interface of the methods behind `dof.kind`), `layered` (the layered method
-//! through it), `layers` (the layer plan), `fixed` (the fixed datapath, `row_mac`), `float`
-//! (the layered float reference), `reference` (per-pixel scatter, theorem form, error split,
-//! depth-edge bands), `potentiate` (a log-coded frame made linear for DoF), `cost` (cost,
-//! memories, signals), `stage` (the stage contract).
+//! through it), `luminance/` (the luminance-aware method), `layers` (the layer plan), `fixed`
+//! (the fixed datapath, `row_mac`), `float` (the layered float reference), `reference`
+//! (per-pixel scatter, theorem form, error split, depth-edge bands), `potentiate` (a log-coded
+//! frame made linear for DoF), `cost` (cost, memories, signals), `stage` (the stage contract).
 
 mod cost;
+pub mod downsample;
 mod fixed;
 mod float;
 mod layered;
 mod layers;
 mod lens;
+pub mod luminance;
 mod mask;
 mod method;
 mod potentiate;

@@ -4,15 +4,17 @@
 //! on request the per-pixel scatter and, for the layered method, the layer theorem check),
 //! the stage-local comparison, the method's cycle-model tokens, cost and ROMs.
 
+use super::downsample::{DownPlan, Downsample};
 use super::layered::Layered;
+use super::luminance::{LumPlan, Luminance};
 use super::method::{Method, n2};
 use super::potentiate::FramePotentiation;
 use super::{
-    DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, difference_degree,
-    edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
+    DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, depth_edge_band,
+    difference_degree, edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
 };
 use crate::config::{CodingKind, DofKind, HwConfig};
-use crate::error::{Error, FileError, Result};
+use crate::error::Result;
 use crate::scene::{Lens, Scene};
 use crate::stage::accumulate::Frame;
 use crate::stage::taps::{FrameCoding, FrameTap, Taps};
@@ -23,6 +25,10 @@ use std::sync::Arc;
 pub enum MethodPlan {
     /// `dof.kind = "layered"`.
     Layered(LayerPlan),
+    /// `dof.kind = "luminance"`.
+    Luminance(LumPlan),
+    /// `dof.kind = "downsample"`.
+    Downsample(DownPlan),
 }
 
 /// Runs `$body` with `$m` bound to the method and `$plan` to its plan.
@@ -31,6 +37,14 @@ macro_rules! with_method {
         match $mp {
             MethodPlan::Layered($plan) => {
                 let $m = &Layered;
+                $body
+            }
+            MethodPlan::Luminance($plan) => {
+                let $m = &Luminance;
+                $body
+            }
+            MethodPlan::Downsample($plan) => {
+                let $m = &Downsample;
                 $body
             }
         }
@@ -90,18 +104,14 @@ impl Stage for Dof {
         };
         let method = match hw.dof.kind {
             DofKind::Layered => format!("layered blur of the frame, threshold P = {}", hw.dof.p),
-            k => {
-                return Err(Error::File(FileError {
-                    file: hw.name.clone(),
-                    line: None,
-                    col: None,
-                    field: "dof.kind".into(),
-                    msg: format!(
-                        "dof.kind = \"{}\" is not built yet; use \"layered\"",
-                        k.name()
-                    ),
-                }));
-            }
+            DofKind::Luminance => format!(
+                "luminance-aware blur of the frame, pre-blur radius {}",
+                hw.dof.luminance.radius
+            ),
+            DofKind::Downsample => format!(
+                "downsample by {0}x{0}, Gaussian, blend by {1} Poisson-disc taps in the CoC",
+                hw.dof.downsample.factor, hw.dof.downsample.taps
+            ),
         };
         let log = if hw.coding.kind == CodingKind::LogAdd {
             " (the log-coded frame potentiated into it by a LUT)"
@@ -152,7 +162,8 @@ impl Stage for Dof {
         .expect("the plan runs dof for a thin lens only");
         let (plan, out, mut facts) = match hw.dof.kind {
             DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
-            DofKind::Luminance | DofKind::Downsample => unreachable!("refused by the plan"),
+            DofKind::Luminance => run(&Luminance, cx, frame, &lens, MethodPlan::Luminance)?,
+            DofKind::Downsample => run(&Downsample, cx, frame, &lens, MethodPlan::Downsample)?,
         };
         if let Some(pot) = &pot {
             facts.work.push(("potentiations", frame.acc.len() as u64));
@@ -286,6 +297,17 @@ fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
                 difference_degree(&add_q, &pp).into();
             let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0);
             (edge_band(w, h, &plan.index, m_max), m_max)
+        }
+        MethodPlan::Luminance(_) => {
+            // The method reaches r (pre-blur) + 1 (bleed) pixels.
+            let r = p.luminance.radius as usize + 1;
+            let (k, c) = (&frame.depth, &frame.coverage);
+            (depth_edge_band(w, h, k, c, n2(cx), &b.lens, r), r)
+        }
+        MethodPlan::Downsample(plan) => {
+            let r = plan.reach;
+            let band = depth_edge_band(w, h, &frame.depth, &frame.coverage, n2(cx), &b.lens, r);
+            (band, r)
         }
     };
     notes["composited_fixed"] = v(&region_error(&outf, &pp, &edge));
