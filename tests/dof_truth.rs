@@ -23,8 +23,8 @@ fn hw() -> HwConfig {
     HwConfig::preset("linear12").expect("preset")
 }
 
-fn truth_of(scene: &Scene, hw: &HwConfig, n: u32) -> TruthFrame {
-    TruthSetup::new(scene, hw, n).expect("thin lens").run()
+fn truth_of(scene: &Scene, n: u32) -> TruthFrame {
+    TruthSetup::new(scene, n).expect("thin lens").run()
 }
 
 fn rms(v: &[f64]) -> f64 {
@@ -66,12 +66,24 @@ fn a_lens_point_shears_a_point_at_depth_d_by_f_px_a_b_times_1_over_u_minus_1_ove
     assert_eq!(pin.len(), depths.len());
     let f_px = 240.0 * 0.5 / (20.0f64.to_radians()).tan();
     let u = 10.0;
-    for (a, b) in [(0.05, 0.0), (0.0, 0.05), (-0.03, 0.02), (0.2, -0.1)] {
-        let lens = LensPoint { a, b, focus: u };
+    for (a, b, jitter) in [
+        (0.05, 0.0, (0.0, 0.0)),
+        (0.0, 0.05, (0.0, 0.0)),
+        (-0.03, 0.02, (0.0, 0.0)),
+        (0.2, -0.1, (0.0, 0.0)),
+        (0.05, -0.02, (0.1, -0.0625)),
+    ] {
+        let lens = LensPoint {
+            a,
+            b,
+            focus: u,
+            jitter,
+        };
         let moved = point_centres(&front_end_through(&scene, &guard, Some(lens)).prims);
         for ((p, m), d) in pin.iter().zip(&moved).zip(depths) {
             let k = f_px * (1.0 / u - 1.0 / d);
-            let (dx, dy) = (m.0 - p.0, m.1 - p.1);
+            // The jitter moves every point by the same sub-pixel offset.
+            let (dx, dy) = (m.0 - p.0 - jitter.0, m.1 - p.1 - jitter.1);
             assert!(
                 (dx - k * a).abs() < 1e-9,
                 "a {a} b {b} D {d}: dx {dx} want {}",
@@ -107,8 +119,9 @@ fn with_a_tiny_aperture_the_truth_is_the_pinhole_float_frame() {
         panic!("the default scene has a thin lens")
     };
     *lens_radius = 1e-9;
-    let h = hw();
-    let t = truth_of(&scene, &h, 16);
+    let t = truth_of(&scene, 64);
+    // The truth's own sampling (4x4 grid, box filter) through the pipeline, pinhole camera.
+    let h = truth::truth_hw();
     let mut pinhole = scene.clone();
     pinhole.camera.lens = Lens::Pinhole;
     let r = pipeline::render(&pinhole, &h, RunOptions::FAST).expect("render");
@@ -117,24 +130,41 @@ fn with_a_tiny_aperture_the_truth_is_the_pinhole_float_frame() {
         .and_then(|t| t.float.frame.clone())
         .expect("the float frame after accumulate");
     assert_eq!(float.len(), t.mean.len());
-    let peak = float.iter().fold(0.0f64, |m, &v| m.max(v));
-    assert!(peak > 1000.0, "a lit scene: {peak}");
-    let mut worst = 0.0f64;
+    let white = truth::frame_white(&h);
+    let peak = t.mean.iter().fold(0.0f64, |m, &v| m.max(v));
+    assert!(peak > 0.25, "a lit scene: {peak}");
+    // The jitter moves the grid over the pixel: away from silhouettes (no spread between
+    // the groups) the area average differs from the grid's average only by the grid's own
+    // error on curved shading (the specular highlight: 0.0021 of white measured); at a
+    // silhouette it is the exact covered area, within one sample's share (1/16) of the
+    // grid's count.
+    let (mut flat, mut worst_flat, mut worst_edge) = (0, 0.0f64, 0.0f64);
     for ((m, f), se) in t.mean.iter().zip(float.iter()).zip(&t.se) {
-        let d = (m - f).abs();
-        assert!(d <= 4.0 * se + 1e-6 * peak, "truth {m} pinhole {f} se {se}");
-        worst = worst.max(d);
+        let d = (m - f / white).abs();
+        if *se < 1e-4 {
+            flat += 1;
+            worst_flat = worst_flat.max(d);
+        } else {
+            worst_edge = worst_edge.max(d);
+        }
     }
-    assert!(worst < 1e-3 * peak, "largest difference {worst} of {peak}");
+    assert!(flat > 160 * 120 / 2, "{flat}");
+    assert!(
+        worst_flat < 4e-3,
+        "largest difference off silhouettes {worst_flat}"
+    );
+    assert!(
+        worst_edge < 1.0 / 16.0 + 4e-3,
+        "largest difference at a silhouette {worst_edge}"
+    );
 }
 
 #[test]
 fn the_standard_error_falls_at_least_as_1_over_sqrt_n_and_predicts_the_actual_error() {
     let scene = small_default();
-    let h = hw();
-    let t16 = truth_of(&scene, &h, 16);
-    let t64 = truth_of(&scene, &h, 64);
-    let t512 = truth_of(&scene, &h, 512);
+    let t16 = truth_of(&scene, 16);
+    let t64 = truth_of(&scene, 64);
+    let t512 = truth_of(&scene, 512);
     let (s16, s64, s512) = (rms(&t16.se), rms(&t64.se), rms(&t512.se));
     assert!(s64 > 0.0 && s512 > 0.0, "a blurred scene has lens noise");
     // 1/sqrt(N) would give a ratio of 2 from N = 16 to 64; the stratified groups do better.
@@ -160,7 +190,7 @@ fn the_standard_error_falls_at_least_as_1_over_sqrt_n_and_predicts_the_actual_er
 fn the_split_is_consistent_total_is_algorithm_plus_quantisation() {
     let scene = small_default();
     let h = hw();
-    let t = truth_of(&scene, &h, 16);
+    let t = truth_of(&scene, 16);
     let r = pipeline::render(&scene, &h, RunOptions::FAST).expect("render");
     let frame = &r.taps(StageId::Accumulate).unwrap().fixed.frame().frame;
     // Identical fixed and float images: no quantisation error, total == algorithm.
@@ -247,13 +277,12 @@ fn the_split_is_consistent_total_is_algorithm_plus_quantisation() {
 #[test]
 fn the_truth_is_bit_identical_on_one_and_two_threads() {
     let scene = small_default();
-    let h = hw();
     let run = |threads| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| truth_of(&scene, &h, 24))
+        pool.install(|| truth_of(&scene, 24))
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.mean, b.mean);
@@ -365,7 +394,9 @@ fn a_sweep_row_carries_the_truth_errors_and_the_truth_is_computed_once_per_scene
     use igemu::sweep::{self, grid, pareto::Axis};
     let d = tmp("sweep");
     let scene = small_default();
-    let text = "gamma.dac_bits = [8, 10]\ndither.kind = [\"none\", \"bayer4\"]\n";
+    // The truth's sampling does not depend on the hardware: one truth for every filter and
+    // sample count.
+    let text = "accumulate.filter = [\"box\", \"tent\"]\nraster.samples = [2, 4]\n";
     let f = TomlFile::from_text("g.toml", text);
     let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
     let cache = pipeline::Cache::new();

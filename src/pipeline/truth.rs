@@ -1,8 +1,7 @@
 //! The depth-of-field truth of a render (`RunOptions::dof_truth_samples`, see
 //! [`crate::truth`]): the lens-averaged frame, memoised in the cache under a key of
-//! everything it depends on (the scene, the `input`, `raster`, `visibility` and
-//! `accumulate` sections and the lens-sample count; not the depth-of-field method, the
-//! gamma or the dither), so a sweep computes it once per scene; and its report.
+//! everything it depends on (the scene and the lens-sample count: its sampling is the same
+//! for every hardware), so a sweep computes it once per scene; and its report.
 
 use super::cache::Cache;
 use super::plan::Plan;
@@ -14,17 +13,13 @@ use crate::scene::Scene;
 use crate::stage::{Memo, NoMemo, RunOptions, StageId, memo};
 use crate::truth::{self, Images, TruthFrame, TruthReport, TruthSetup};
 
-/// The memo key of a truth frame: the plan's key (the scene and the tool version), the
-/// hardware sections the float path reads, and the lens-sample count.
-pub fn key(plan: &Plan, hw: &HwConfig, lens_samples: u32) -> u64 {
-    let sections: Vec<serde_json::Value> = ["input", "raster", "visibility", "accumulate"]
-        .iter()
-        .map(|s| hw.section(s))
-        .collect();
+/// The memo key of a truth frame: the plan's key (the scene and the tool version) and the
+/// lens-sample count (the truth's sampling is the same for every hardware, see
+/// [`crate::truth::truth_hw`]).
+pub fn key(plan: &Plan, lens_samples: u32) -> u64 {
     Fnv::new()
         .u64(plan.key)
-        .str("dof truth")
-        .str(&serde_json::Value::Array(sections).to_string())
+        .str("dof truth (area-sampled, box)")
         .u64(u64::from(lens_samples))
         .finish()
 }
@@ -46,13 +41,13 @@ pub(super) fn report(
     if n == 0 || !plan.layout.has(StageId::Dof) {
         return Ok(None);
     }
-    let setup = TruthSetup::new(scene, hw, n)?;
+    let setup = TruthSetup::new(scene, n)?;
     let m: &dyn Memo = match cache {
         Some(c) => c,
         None => &NoMemo,
     };
     let mut made = false;
-    let frame = memo::<TruthFrame>(m, key(plan, hw, n), || {
+    let frame = memo::<TruthFrame>(m, key(plan, n), || {
         made = true;
         setup.run()
     });

@@ -34,7 +34,8 @@ fn z_of(near: f64, far: f64, d: f64) -> f64 {
 /// `a` along the camera's right axis and `b` along its up axis, and the image is sheared so
 /// that the plane at distance `focus` stays where the pinhole camera puts it. A point at
 /// view depth `d` then moves by `f_px (a, -b) (1/focus - 1/d)` pixels (screen y points down;
-/// `f_px = H / (2 tan(fov/2))`), zero on the focus plane.
+/// `f_px = H / (2 tan(fov/2))`), zero on the focus plane. `jitter` then moves the whole
+/// image by a sub-pixel offset (the truth's area sampling of each pixel).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LensPoint {
     /// Offset along the camera's right axis, scene units.
@@ -43,6 +44,8 @@ pub struct LensPoint {
     pub b: f64,
     /// Distance of the plane that stays fixed (the focus distance), scene units, > 0.
     pub focus: f64,
+    /// A shift of the whole image, pixels `(x, y)` (0 for the lens alone).
+    pub jitter: (f64, f64),
 }
 
 /// The look-at camera as a view transform plus a perspective projection to pixels.
@@ -77,8 +80,8 @@ impl View {
             // The shear keeps the focus plane fixed: a point there moves by -f a / U with
             // the eye (x) and back by +f a / U here; likewise for y, which points down.
             eye = add(add(eye, scale(right, l.a)), scale(up, l.b));
-            cx += focal_px * l.a / l.focus;
-            cy -= focal_px * l.b / l.focus;
+            cx += focal_px * l.a / l.focus + l.jitter.0;
+            cy -= focal_px * l.b / l.focus - l.jitter.1;
         }
         Self {
             eye,
@@ -100,8 +103,8 @@ impl View {
         let mut v = sv(p, i);
         if let Some(l) = self.lens {
             let k = self.focal_px * (1.0 / l.focus - 1.0 / d_of(self.near, self.far, v.z));
-            v.x += k * l.a;
-            v.y -= k * l.b;
+            v.x += k * l.a + l.jitter.0;
+            v.y += l.jitter.1 - k * l.b;
         }
         v
     }

@@ -46,6 +46,27 @@ pub fn lens_offsets(n: u32, r: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// The sub-pixel jitter `(x, y)` (pixels) of each of `n` lens points for a `grid`² sample
+/// grid: uniform over one sample cell `[-1/(2 grid), 1/(2 grid))²`, so the grid's samples
+/// sweep the whole pixel. Point `k` of group `g` (as in [`lens_offsets`]) takes the `k`-th
+/// point of the R2 sequence (additive recurrence on the plastic number) shifted by a random
+/// offset of the group: each group is uniform over the cell and stratified on its own, and
+/// the groups are independent.
+pub fn pixel_jitter(n: u32, grid: u32) -> Vec<(f64, f64)> {
+    // 1/p and 1/p^2, p the plastic number (the real root of x^3 = x + 1).
+    const A1: f64 = 0.754_877_666_246_692_7;
+    const A2: f64 = 0.569_840_290_998_053_2;
+    let cell = 1.0 / f64::from(grid.max(1));
+    (0..n)
+        .map(|i| {
+            let (k, g) = (f64::from(i / GROUPS), u64::from(i % GROUPS));
+            let u = (unit(splitmix(SEED ^ 0x6a69_7474, 2 * g)) + k * A1).fract();
+            let v = (unit(splitmix(SEED ^ 0x6a69_7474, 2 * g + 1)) + k * A2).fract();
+            ((u - 0.5) * cell, (v - 0.5) * cell)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -71,5 +92,27 @@ mod tests {
         assert_eq!(p, lens_offsets(n, r));
         // Groups differ (independent rotations).
         assert_ne!(p[0], p[1]);
+    }
+
+    #[test]
+    fn jitter_stays_in_one_sample_cell_and_covers_it_evenly() {
+        let (n, grid) = (256, 4);
+        let j = pixel_jitter(n, grid);
+        assert_eq!(j.len(), 256);
+        assert!(
+            j.iter()
+                .all(|&(x, y)| (-0.125..0.125).contains(&x) && (-0.125..0.125).contains(&y))
+        );
+        // Each group of 32 puts points in every quarter of the cell (a 2x2 split).
+        for g in 0..GROUPS as usize {
+            let mut q = [0u32; 4];
+            for &(x, y) in j.iter().skip(g).step_by(GROUPS as usize) {
+                q[usize::from(x >= 0.0) + 2 * usize::from(y >= 0.0)] += 1;
+            }
+            assert!(q.iter().all(|&c| (5..=11).contains(&c)), "group {g}: {q:?}");
+        }
+        let (sx, sy) = j.iter().fold((0.0, 0.0), |s, &(x, y)| (s.0 + x, s.1 + y));
+        assert!((sx / 256.0).abs() < 0.01 && (sy / 256.0).abs() < 0.01);
+        assert_eq!(j, pixel_jitter(n, grid));
     }
 }

@@ -228,8 +228,12 @@ pub fn assess(
 ) -> TruthReport {
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let (edge, r) = edge_band(scene, hw, img.frame);
-    let truth_dac = dac_codes(&truth.mean, scene, hw);
-    let dac_se = dac_error(&truth.mean, &truth.se, scene, hw);
+    // The truth in this hardware's frame LSBs.
+    let white = super::frame_white(hw);
+    let mean: Vec<f64> = truth.mean.iter().map(|v| v * white).collect();
+    let se: Vec<f64> = truth.se.iter().map(|v| v * white).collect();
+    let truth_dac = dac_codes(&mean, scene, hw);
+    let dac_se = dac_error(&mean, &se, scene, hw);
     TruthReport {
         lens_samples: truth.lens_samples,
         ms: truth.ms,
@@ -238,7 +242,7 @@ pub fn assess(
         edge_pixels: edge.iter().filter(|&&e| e).count() as u64,
         noise: Noise {
             groups: super::GROUPS,
-            frame_lsb: spread_split(&truth.se, &edge),
+            frame_lsb: spread_split(&se, &edge),
             dac: spread_split(&dac_se, &edge),
         },
         total: split(img.fixed, &truth_dac, &edge, &display),

@@ -1,9 +1,13 @@
-//! The truth frame: the float frame (frame LSBs) of every lens point, averaged, with the
-//! standard error of the average from the interleaved groups.
+//! The truth frame: the float frame of every lens point, averaged, with the standard error
+//! of the average from the interleaved groups. Its pixels are sampled the same way whatever
+//! the hardware under test ([`truth_hw`]): a [`TRUTH_GRID`]² grid, moved by a different
+//! sub-pixel jitter at every lens point ([`pixel_jitter`]), and the box filter, so over the
+//! lens points each pixel integrates its own area (an ideal sensor pixel). The truth thus
+//! ranks sample counts and filters too. Values are linear intensity, 1 = full white.
 
-use super::aperture::lens_offsets;
+use super::aperture::{lens_offsets, pixel_jitter};
 use super::{GROUPS, check_samples};
-use crate::config::HwConfig;
+use crate::config::{FilterKind, HwConfig};
 use crate::error::{Error, FileError, Result};
 use crate::scene::{GuardBand, Lens, LensPoint, Scene, front_end_through};
 use crate::stage::accumulate::{Kernel, float_frame, kernel, regions};
@@ -19,9 +23,10 @@ pub struct TruthFrame {
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
-    /// The average over the lens points of the float frame, frame LSBs, row-major.
+    /// The average over the lens points of the float frame, linear intensity (1 = full
+    /// white), row-major.
     pub mean: Vec<f64>,
-    /// Per pixel, the standard error of `mean` estimated from the groups, frame LSBs.
+    /// Per pixel, the standard error of `mean` estimated from the groups, same units.
     pub se: Vec<f64>,
     /// Lens points averaged.
     pub lens_samples: u32,
@@ -29,18 +34,40 @@ pub struct TruthFrame {
     pub ms: f64,
 }
 
-/// A truth frame ready to compute: the scene (with a thin lens), the hardware sections it
-/// reads and the lens points.
+/// Samples per pixel axis of the truth's float path (each lens point moves them by its
+/// jitter, so over the lens points they cover the pixel's area).
+pub const TRUTH_GRID: u32 = 4;
+
+/// The hardware whose float path renders the truth's lens points, the same for every
+/// hardware under test: the default configuration with a [`TRUTH_GRID`]² grid and the box
+/// filter (the float path reads only the sample grid, the filter and the frame's full
+/// white; no fixed-point format of it matters).
+pub fn truth_hw() -> HwConfig {
+    let mut hw = HwConfig::default_config();
+    hw.raster.samples = TRUTH_GRID;
+    hw.accumulate.filter = FilterKind::Box;
+    hw
+}
+
+/// Full white of `hw`'s frame in its float frame's units (frame LSBs).
+pub fn frame_white(hw: &HwConfig) -> f64 {
+    let ff = hw.accumulate.frame.format;
+    (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64
+}
+
+/// A truth frame ready to compute: the scene (with a thin lens), the lens points and their
+/// sub-pixel jitters.
 pub struct TruthSetup<'a> {
     scene: &'a Scene,
-    hw: &'a HwConfig,
+    hw: HwConfig,
     focus: f64,
     offsets: Vec<(f64, f64)>,
+    jitter: Vec<(f64, f64)>,
 }
 
 impl<'a> TruthSetup<'a> {
     /// Checks the scene (a thin lens) and the lens-sample count ([`check_samples`]).
-    pub fn new(scene: &'a Scene, hw: &'a HwConfig, lens_samples: u32) -> Result<Self> {
+    pub fn new(scene: &'a Scene, lens_samples: u32) -> Result<Self> {
         let Lens::ThinLens {
             lens_radius,
             focus_distance,
@@ -66,9 +93,10 @@ impl<'a> TruthSetup<'a> {
         })?;
         Ok(Self {
             scene,
-            hw,
+            hw: truth_hw(),
             focus: focus_distance,
             offsets: lens_offsets(lens_samples, lens_radius),
+            jitter: pixel_jitter(lens_samples, TRUTH_GRID),
         })
     }
 
@@ -78,7 +106,7 @@ impl<'a> TruthSetup<'a> {
     pub fn run(&self) -> TruthFrame {
         let t = std::time::Instant::now();
         let (w, h) = (self.scene.image.width, self.scene.image.height);
-        let hw = self.hw;
+        let hw = &self.hw;
         let guard = GuardBand::around(w, h, f64::from(hw.raster.guard_band));
         let grid = Grid::new(hw.raster.samples, hw.subpixel_bits(), w, h);
         let k = kernel(hw);
@@ -97,6 +125,7 @@ impl<'a> TruthSetup<'a> {
                         a,
                         b,
                         focus: self.focus,
+                        jitter: self.jitter[i],
                     };
                     lens_frame(self.scene, hw, &guard, &grid, &k, lens)
                 })
@@ -106,6 +135,10 @@ impl<'a> TruthSetup<'a> {
                     *s += v;
                 }
             }
+        }
+        let white = frame_white(hw);
+        for v in sums.iter_mut().flatten() {
+            *v /= white;
         }
         let (mean, se) = mean_and_error(&sums, n);
         TruthFrame {

@@ -39,11 +39,14 @@ mod aperture;
 mod errors;
 mod frame;
 
-pub use aperture::lens_offsets;
+pub use aperture::{lens_offsets, pixel_jitter};
 pub use errors::{
     Diff, Images, Noise, Split, Spread, TruthReport, assess, dac_codes, dac_error, edge_band,
 };
-pub use frame::{TruthFrame, TruthSetup, batch_size, lens_frame, mean_and_error};
+pub use frame::{
+    TRUTH_GRID, TruthFrame, TruthSetup, batch_size, frame_white, lens_frame, mean_and_error,
+    truth_hw,
+};
 
 /// Interleaved groups of lens points; the lens-sample count is a multiple of it.
 pub const GROUPS: u32 = 8;
