@@ -441,3 +441,35 @@ fn a_sweep_row_carries_the_truth_errors_and_the_truth_is_computed_once_per_scene
     assert_ne!(rows[0].id, plain);
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn truth_out_writes_the_truths_dac_codes_and_is_refused_without_a_truth() {
+    let d = tmp("out");
+    let (out, truth_png) = (d.join("o.png"), d.join("truth.png"));
+    let (out, truth_png) = (out.to_str().unwrap(), truth_png.to_str().unwrap());
+    let args = ["render", "default", "--dof-truth", "--lens-samples", "8"];
+    let (code, _, stderr) = igemu(&[&args[..], &["-o", out, "--truth-out", truth_png]].concat());
+    assert_eq!(code, 0, "{stderr}");
+    let opts = RunOptions {
+        dof_truth_samples: 8,
+        ..RunOptions::FAST
+    };
+    let r = pipeline::render(&Scene::default_scene(), &hw(), opts).unwrap();
+    let want = r.truth_dac.expect("a thin lens has a truth");
+    let got = image::open(truth_png).unwrap().into_luma8().into_raw();
+    assert_eq!(got.len(), want.len());
+    assert!(got.iter().zip(&want).all(|(&g, &w)| u16::from(g) == w));
+    // The truth is not the fixed image (the method differs from the lens).
+    assert_ne!(want, r.dac);
+    // Without --dof-truth, or on a pinhole scene: exit 2, nothing written.
+    std::fs::remove_file(truth_png).unwrap();
+    let (code, _, stderr) = igemu(&["render", "default", "-o", out, "--truth-out", truth_png]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--dof-truth"), "{stderr}");
+    let pinhole = ["render", "default-pinhole", "--dof-truth", "--lens-samples", "8"];
+    let (code, _, stderr) = igemu(&[&pinhole[..], &["-o", out, "--truth-out", truth_png]].concat());
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--truth-out") && stderr.contains("pinhole"), "{stderr}");
+    assert!(!std::path::Path::new(truth_png).exists());
+    std::fs::remove_dir_all(&d).ok();
+}

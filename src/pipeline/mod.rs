@@ -38,6 +38,8 @@ pub struct Render {
     pub dac: Vec<u16>,
     /// Float reference DAC codes.
     pub dac_ref: Vec<u16>,
+    /// The depth-of-field truth's DAC codes (`RunOptions::dof_truth_samples`, thin lens).
+    pub truth_dac: Option<Vec<u16>>,
     /// DAC width.
     pub dac_bits: u32,
     /// The cycle model's workload (to re-simulate with other timings or a VCD trace).
@@ -109,13 +111,19 @@ pub fn render_with(
         cache,
         opts,
     );
-    report.dof_truth = truth::report(scene, hw, &plan, &steps, &dac, &dac_ref, cache, opts)?;
+    let (dof_truth, truth_dac) =
+        match truth::report(scene, hw, &plan, &steps, &dac, &dac_ref, cache, opts)? {
+            Some((r, d)) => (Some(r), Some(d)),
+            None => (None, None),
+        };
+    report.dof_truth = dof_truth;
     Ok(Render {
         report,
         plan,
         steps,
         dac,
         dac_ref,
+        truth_dac,
         dac_bits: hw.gamma.dac_bits,
         workload,
         contour_map,

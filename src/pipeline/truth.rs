@@ -24,7 +24,7 @@ pub fn key(plan: &Plan, lens_samples: u32) -> u64 {
         .finish()
 }
 
-/// The truth report of a render, when `opts` asks for it and the plan has a dof stage
+/// The truth report of a render and the truth's DAC codes, when `opts` asks for it and the plan has a dof stage
 /// (a pinhole plan gets a note instead, [`Plan::notes`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn report(
@@ -36,7 +36,7 @@ pub(super) fn report(
     dac_ref: &[u16],
     cache: Option<&Cache>,
     opts: RunOptions,
-) -> Result<Option<TruthReport>> {
+) -> Result<Option<(TruthReport, Vec<u16>)>> {
     let n = opts.dof_truth_samples;
     if n == 0 || !plan.layout.has(StageId::Dof) {
         return Ok(None);
@@ -60,5 +60,6 @@ pub(super) fn report(
         float: dac_ref,
         frame: &acc.outcome.taps.fixed.frame().frame,
     };
-    Ok(Some(truth::assess(scene, hw, &frame, !made, &images)))
+    let report = truth::assess(scene, hw, &frame, !made, &images);
+    Ok(Some((report, truth::truth_dac(&frame, scene, hw))))
 }

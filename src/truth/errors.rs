@@ -105,6 +105,14 @@ pub fn dac_codes(frame: &[f64], scene: &Scene, hw: &HwConfig) -> Vec<u16> {
     dac
 }
 
+/// The truth's DAC codes for `hw`: its frame scaled to `hw`'s full white, through the float
+/// reference's gamma curve and DAC (what [`assess`] compares with).
+pub fn truth_dac(truth: &TruthFrame, scene: &Scene, hw: &HwConfig) -> Vec<u16> {
+    let white = super::frame_white(hw);
+    let mean: Vec<f64> = truth.mean.iter().map(|v| v * white).collect();
+    dac_codes(&mean, scene, hw)
+}
+
 /// The standard error `se` of `mean` (frame LSBs) in DAC codes: half the float gamma
 /// curve's rise from `mean - se` to `mean + se`.
 pub fn dac_error(mean: &[f64], se: &[f64], scene: &Scene, hw: &HwConfig) -> Vec<f64> {

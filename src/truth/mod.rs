@@ -42,6 +42,7 @@ mod frame;
 pub use aperture::{lens_offsets, pixel_jitter};
 pub use errors::{
     Diff, Images, Noise, Split, Spread, TruthReport, assess, dac_codes, dac_error, edge_band,
+    truth_dac,
 };
 pub use frame::{
     TRUTH_GRID, TruthFrame, TruthSetup, batch_size, frame_white, lens_frame, mean_and_error,

@@ -50,6 +50,9 @@ pub struct RenderArgs {
     pub dof_reference: bool,
     #[command(flatten)]
     pub truth: TruthArgs,
+    /// Also write the depth-of-field truth's DAC codes (same bit depth as OUT; with --dof-truth, a thin-lens scene).
+    #[arg(long, requires = "dof_truth")]
+    pub truth_out: Option<String>,
 }
 
 /// Runs `igemu render`; returns the exit code.
@@ -60,6 +63,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         ("--reference-out", &a.reference_out),
         ("--diff-out", &a.diff_out),
         ("--banding-out", &a.banding_out),
+        ("--truth-out", &a.truth_out),
         ("--report", &a.report),
     ] {
         outs.extend(p.as_deref().map(|p| (flag, p)));
@@ -73,8 +77,18 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
     if let Some(dir) = rom_dir {
         inputs.check_in("--rom-out", dir, [igemu::cost::rom::MANIFEST])?;
     }
+    let scene = a.s.scene()?;
+    if a.truth_out.is_some() && matches!(scene.camera.lens, igemu::scene::Lens::Pinhole) {
+        return Err(arg_error(
+            "--truth-out",
+            format!(
+                "scene `{}` has a pinhole camera: everything is in focus, there is no depth-of-field truth to write",
+                scene.name
+            ),
+        ));
+    }
     let r = pipeline::render(
-        &a.s.scene()?,
+        &scene,
         &a.s.hw()?,
         a.s.opts(RunOptions {
             stage_local: !a.no_local,
@@ -99,6 +113,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
     }
     if let Some(p) = &a.diff_out {
         output::write_diff(p, &r.dac, &r.dac_ref, w, h)?;
+    }
+    if let (Some(p), Some(t)) = (&a.truth_out, &r.truth_dac) {
+        output::write_dac(p, t, w, h, r.dac_bits)?;
     }
     if let Some(p) = &a.banding_out {
         let img =
