@@ -466,10 +466,19 @@ fn truth_out_writes_the_truths_dac_codes_and_is_refused_without_a_truth() {
     let (code, _, stderr) = igemu(&["render", "default", "-o", out, "--truth-out", truth_png]);
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("--dof-truth"), "{stderr}");
-    let pinhole = ["render", "default-pinhole", "--dof-truth", "--lens-samples", "8"];
+    let pinhole = [
+        "render",
+        "default-pinhole",
+        "--dof-truth",
+        "--lens-samples",
+        "8",
+    ];
     let (code, _, stderr) = igemu(&[&pinhole[..], &["-o", out, "--truth-out", truth_png]].concat());
     assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("--truth-out") && stderr.contains("pinhole"), "{stderr}");
+    assert!(
+        stderr.contains("--truth-out") && stderr.contains("pinhole"),
+        "{stderr}"
+    );
     assert!(!std::path::Path::new(truth_png).exists());
     std::fs::remove_dir_all(&d).ok();
 }
