@@ -2,12 +2,12 @@
 //! near, the fixed layered convolution and compositing, the same layers in f64, one
 //! cycle-model token per layer, the cost and the coefficient ROM.
 
-use super::method::{Method, n2};
+use super::method::{Method, half_size_error, n2};
 use super::{
     DepthImage, LayerPlan, LensMap, layer_work, layered_f64, layered_fixed, overflow_signal,
     overflow_signal_in, plan_layers,
 };
-use crate::error::{Error, FileError, Result};
+use crate::error::{Error, Result};
 use crate::stage::accumulate::Frame;
 use crate::stage::{Cost, Cx, Facts, MemImage, TokenKind, Tokens};
 
@@ -26,15 +26,8 @@ impl Method for Layered {
         let hw = cx.hw;
         let p = &hw.dof;
         let frame_fmt = hw.accumulate.frame.format;
-        let plan = plan_layers(&frame.depth, &frame.coverage, n2(cx), lens, p).map_err(|msg| {
-            Error::File(FileError {
-                file: hw.name.clone(),
-                line: None,
-                col: None,
-                field: "dof.max_half_size".into(),
-                msg,
-            })
-        })?;
+        let plan = plan_layers(&frame.depth, &frame.coverage, n2(cx), lens, p)
+            .map_err(|msg| half_size_error(cx, msg))?;
         let img = DepthImage::of_frame(frame, &frame.acc, n2(cx));
         let (out, work) =
             layered_fixed(&img, &plan, p, frame_fmt).map_err(|(signal, bits)| Error::Overflow {

@@ -4,7 +4,7 @@
 //! the stage-local comparison, the reference notes).
 
 use super::LensMap;
-use crate::error::Result;
+use crate::error::{Error, FileError, Result};
 use crate::stage::accumulate::Frame;
 use crate::stage::{Cost, Cx, Facts, MemImage, Tokens};
 
@@ -49,4 +49,16 @@ pub trait Method: Sync {
 /// Samples per pixel (`n^2`) of the configuration.
 pub fn n2(cx: &Cx) -> u32 {
     cx.hw.raster.samples * cx.hw.raster.samples
+}
+
+/// A method's plan refused for a blur wider than `dof.max_half_size` allows (`msg` says by
+/// how much and what to change), naming the hardware file and the field.
+pub fn half_size_error(cx: &Cx, msg: String) -> Error {
+    Error::File(FileError {
+        file: cx.hw.name.clone(),
+        line: None,
+        col: None,
+        field: "dof.max_half_size".into(),
+        msg,
+    })
 }

@@ -39,9 +39,9 @@ pub use float::downsample_f64;
 pub use plan::{Blur, DownPlan, ROM_QUANT, plan_downsample};
 pub use poisson::{Poisson, poisson_disc};
 
-use super::method::Method;
+use super::method::{Method, half_size_error};
 use super::{LensMap, overflow_signal_in};
-use crate::error::{Error, FileError, Result};
+use crate::error::{Error, Result};
 use crate::stage::accumulate::Frame;
 use crate::stage::{Cost, Cx, Facts, MemImage, Tokens};
 
@@ -56,15 +56,8 @@ impl Method for Downsample {
         let p = &hw.dof;
         let frame_fmt = hw.accumulate.frame.format;
         let (w, h) = (frame.width as usize, frame.height as usize);
-        let mut plan = plan_downsample(&frame.depth, w, h, lens, p).map_err(|msg| {
-            Error::File(FileError {
-                file: hw.name.clone(),
-                line: None,
-                col: None,
-                field: "dof.max_half_size".into(),
-                msg,
-            })
-        })?;
+        let mut plan =
+            plan_downsample(&frame.depth, w, h, lens, p).map_err(|msg| half_size_error(cx, msg))?;
         let (out, mut work) = downsample_fixed(&frame.acc, &frame.depth, &plan, p, frame_fmt)
             .map_err(|(signal, format, value)| Error::Overflow {
                 signal,
