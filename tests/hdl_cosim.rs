@@ -8,8 +8,8 @@
 mod common;
 
 use common::{hw, scene, tri};
-use igemu::config::DitherKind;
 use igemu::config::HwConfig;
+use igemu::config::{DitherKind, DofKind};
 use igemu::fixed::{Overflow, QFormat, Quant};
 use igemu::hdl::verilator::Sim;
 use igemu::hdl::{self, Bench, Verdict, exhaustive};
@@ -306,6 +306,16 @@ fn unknown_stage_and_linear_log_adder_are_refused() {
         e.to_string().contains("coding.kind") && e.to_string().contains("--stage logdomain"),
         "{e}"
     );
+    // The dof row MAC is the layered method's: refused for the other two kinds.
+    for kind in [DofKind::Luminance, DofKind::Downsample] {
+        let dof = Scene::default_scene();
+        let e =
+            hdl::vectors(StageId::Dof, &dof, &hw("linear12", |h| h.dof.kind = kind)).unwrap_err();
+        assert!(
+            e.to_string().contains("dof.kind") && e.to_string().contains(kind.name()),
+            "{e}"
+        );
+    }
 }
 
 #[test]

@@ -10,7 +10,7 @@
 //! values the module must ignore.
 
 use super::{RANDOM, TAPS, bad};
-use crate::config::HwConfig;
+use crate::config::{DofKind, HwConfig};
 use crate::error::{Error, FileError, Result};
 use crate::hdl::bench::{Bench, Rng};
 use crate::pipeline;
@@ -39,6 +39,16 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
             field: "camera.lens".into(),
             msg: "the dof row MAC needs a thin-lens camera (depth of field); this scene has a pinhole camera (the default and cone-focus scenes have a thin lens)".into(),
         }));
+    }
+    if p.kind != DofKind::Layered {
+        return Err(bad(
+            hw,
+            "dof.kind",
+            format!(
+                "the dof row MAC is the layered method's datapath; dof.kind = \"{}\" has no Verilog model yet (use kind = \"layered\" for the vectors)",
+                p.kind.name()
+            ),
+        ));
     }
     if p.acc_bits > 64 {
         return Err(bad(
