@@ -259,7 +259,7 @@ fn pareto_front_keeps_exactly_the_non_dominated_rows() {
     // The plotters plot: every row grey in both panels (+ a legend dot each), each panel's
     // front red (its points, its line and a legend line).
     let svg_path = d.join("p.svg").to_string_lossy().into_owned();
-    sweep::plot::write(&rows, pareto::Axis::Error, &svg_path).unwrap();
+    sweep::plot::write(&rows, &axes, &svg_path).unwrap();
     let svg = std::fs::read_to_string(&svg_path).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     let fc = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Cost]).len();
@@ -273,14 +273,41 @@ fn pareto_front_keeps_exactly_the_non_dominated_rows() {
     );
     assert!(svg.contains("mean Weber error") && svg.contains("Pareto front: "));
     let png_path = d.join("p.png").to_string_lossy().into_owned();
-    sweep::plot::write(&rows, pareto::Axis::Error, &png_path).unwrap();
+    sweep::plot::write(&rows, &axes, &png_path).unwrap();
     let png = image::open(&png_path).unwrap().to_rgb8();
     assert_eq!(png.dimensions(), sweep::plot::SIZE);
     assert!(
         png.pixels().any(|p| p.0 == [255, 0, 0]),
         "the front is drawn"
     );
-    assert!(sweep::plot::write(&rows, pareto::Axis::Error, "p.gif").is_err());
+    assert!(sweep::plot::write(&rows, &axes, "p.gif").is_err());
+    // Speed against error: rows carry the emulator's time per stage, and a further axis
+    // gets its own panel.
+    for r in &rows {
+        let t = &r.timing;
+        assert!(t.fixed_ms > 0.0 && t.float_ms > 0.0, "{t:?}");
+        let names: Vec<&str> = t.stages.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names.first(), Some(&"input"), "{names:?}");
+        let sum: f64 = t.stages.iter().map(|s| s.fixed_ms).sum();
+        assert!((sum - t.fixed_ms).abs() < 1e-9 * sum.max(1.0));
+        assert_eq!(pareto::Axis::EmulatorTime.key(r), t.fixed_ms);
+    }
+    let speed = pareto::Axis::parse_list("error,emulator_time").unwrap();
+    assert_eq!(
+        sweep::plot::panel_axes(&speed),
+        [
+            pareto::Axis::Cost,
+            pareto::Axis::Throughput,
+            pareto::Axis::EmulatorTime
+        ]
+    );
+    sweep::plot::write(&rows, &speed, &png_path).unwrap();
+    let png = image::open(&png_path).unwrap().to_rgb8();
+    assert_eq!(png.dimensions(), sweep::plot::size(3));
+    let svg_path3 = d.join("p3.svg").to_string_lossy().into_owned();
+    sweep::plot::write(&rows, &speed, &svg_path3).unwrap();
+    let svg = std::fs::read_to_string(&svg_path3).unwrap();
+    assert!(svg.contains("emulator fixed ms"));
     assert!(pareto::Axis::parse_list("error").is_err());
     assert!(pareto::Axis::parse_list("error,bogus").is_err());
 }
@@ -832,7 +859,7 @@ mod files {
             std::fs::write(&p, "old plot").unwrap();
             std::fs::hard_link(&p, &keep).unwrap();
             let before = listing(&d);
-            sweep::plot::write(&rows, pareto::Axis::Error, p.to_str().unwrap()).unwrap();
+            sweep::plot::write(&rows, &[pareto::Axis::Error], p.to_str().unwrap()).unwrap();
             let kept = std::fs::read(&keep).unwrap();
             assert!(kept == b"old plot", "{ext}: written in place, not renamed");
             assert!(
@@ -856,7 +883,7 @@ mod files {
             let e = if name.ends_with("jsonl") {
                 sweep::rewrite_sorted(t, &rows).unwrap_err()
             } else {
-                sweep::plot::write(&rows, pareto::Axis::Error, t).unwrap_err()
+                sweep::plot::write(&rows, &[pareto::Axis::Error], t).unwrap_err()
             };
             assert!(e.to_string().contains(name), "{name}: {e}");
             assert_eq!(listing(&d), before, "{name}");
@@ -864,7 +891,9 @@ mod files {
         }
         // A folder that does not exist: nothing is created.
         let missing = d.join("missing").join("p.svg");
-        assert!(sweep::plot::write(&rows, pareto::Axis::Error, missing.to_str().unwrap()).is_err());
+        assert!(
+            sweep::plot::write(&rows, &[pareto::Axis::Error], missing.to_str().unwrap()).is_err()
+        );
         assert!(!d.join("missing").exists());
     }
 }

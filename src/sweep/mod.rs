@@ -199,8 +199,31 @@ impl TruthMetrics {
 /// Wall time of a row (the only field that differs between runs).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct RowTiming {
-    /// Milliseconds for the whole render.
+    /// Milliseconds for the whole render (stages taken from the cache cost nothing here).
     pub render_ms: f64,
+    /// The emulator's own time for this configuration: the fixed models' milliseconds summed
+    /// over the stages, each as measured when it was computed (a stage reused from the
+    /// cache keeps its time), so rows compare the speed of emulating their hardware; the
+    /// axis `emulator_time`.
+    #[serde(default)]
+    pub fixed_ms: f64,
+    /// The float references' milliseconds, summed likewise.
+    #[serde(default)]
+    pub float_ms: f64,
+    /// Per stage, in run order.
+    #[serde(default)]
+    pub stages: Vec<StageTiming>,
+}
+
+/// The emulator's time of one stage of a row.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct StageTiming {
+    /// Stage name.
+    pub name: String,
+    /// Fixed model, ms.
+    pub fixed_ms: f64,
+    /// Float reference, ms.
+    pub float_ms: f64,
 }
 
 /// One JSON line of the output.
@@ -360,7 +383,20 @@ fn run_job_as(
                     .map(|_| TRUTH_REUSED.to_string()),
             )
             .collect(),
-        timing: RowTiming { render_ms },
+        timing: RowTiming {
+            render_ms,
+            fixed_ms: rep.timing.fixed_ms,
+            float_ms: rep.timing.float_ms,
+            stages: rep
+                .stages
+                .iter()
+                .map(|s| StageTiming {
+                    name: s.name.clone(),
+                    fixed_ms: s.fixed_ms,
+                    float_ms: s.float_ms,
+                })
+                .collect(),
+        },
     })
 }
 

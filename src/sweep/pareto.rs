@@ -30,6 +30,9 @@ pub enum Axis {
     /// Mean Weber error of the fixed pipeline against the float reference, from the truth's
     /// split (the same images as `error`).
     TruthQuantisation,
+    /// The emulator's fixed-model milliseconds for the row's configuration (minimised):
+    /// speed against error.
+    EmulatorTime,
 }
 
 /// Axis names accepted by `--axes`.
@@ -45,6 +48,7 @@ pub const AXES: &[&str] = &[
     "truth_total",
     "truth_algorithm",
     "truth_quantisation",
+    "emulator_time",
 ];
 
 impl Axis {
@@ -62,6 +66,7 @@ impl Axis {
             "truth_total" => Axis::TruthTotal,
             "truth_algorithm" => Axis::TruthAlgorithm,
             "truth_quantisation" => Axis::TruthQuantisation,
+            "emulator_time" => Axis::EmulatorTime,
             other => {
                 return Err(format!(
                     "unknown axis `{other}`; allowed: {}",
@@ -101,6 +106,7 @@ impl Axis {
             Axis::TruthTotal => "Weber vs truth",
             Axis::TruthAlgorithm => "float Weber vs truth",
             Axis::TruthQuantisation => "Weber fixed vs float",
+            Axis::EmulatorTime => "emulator fixed ms",
         }
     }
 
@@ -121,6 +127,7 @@ impl Axis {
             Axis::TruthTotal => truth(r, |t| t.total.whole.weber_mean),
             Axis::TruthAlgorithm => truth(r, |t| t.algorithm.whole.weber_mean),
             Axis::TruthQuantisation => truth(r, |t| t.quantisation.whole.weber_mean),
+            Axis::EmulatorTime => r.timing.fixed_ms,
         }
     }
 

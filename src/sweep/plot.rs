@@ -1,5 +1,6 @@
-//! The Pareto plot of a sweep (`--plot F.svg` / `F.png`), drawn with `plotters`: two panels,
-//! the error axis against cost and against throughput; every row a grey dot, each scene's
+//! The Pareto plot of a sweep (`--plot F.svg` / `F.png`), drawn with `plotters`: the first
+//! `--axes` axis (an error) against cost, against throughput and against every further
+//! `--axes` axis (e.g. `emulator_time`), one panel each; every row a grey dot, each scene's
 //! Pareto front on the panel's two axes a coloured line through its configurations.
 //!
 //! Text uses DejaVu Sans, embedded (the `dejavu` crate), so a PNG renders the same on a
@@ -11,8 +12,25 @@ use crate::error::{Error, FileError, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// Plot size in pixels (SVG user units).
+/// Plot size in pixels (SVG user units) of the two standard panels.
 pub const SIZE: (u32, u32) = (1100, 460);
+
+/// The horizontal axes of the panels for `--axes`: cost, throughput, then every further axis
+/// after the first that is not one of those.
+pub fn panel_axes(axes: &[Axis]) -> Vec<Axis> {
+    let mut v = vec![Axis::Cost, Axis::Throughput];
+    for &a in axes.iter().skip(1) {
+        if !v.contains(&a) && Some(&a) != axes.first() {
+            v.push(a);
+        }
+    }
+    v
+}
+
+/// Plot size for `panels` panels side by side.
+pub fn size(panels: usize) -> (u32, u32) {
+    (SIZE.0 / 2 * panels.max(1) as u32, SIZE.1)
+}
 
 /// The image formats `--plot` writes, by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,22 +81,25 @@ fn font() {
     });
 }
 
-/// Writes the plot of `rows` to `path` (SVG or PNG by extension), with `error` as the
-/// vertical axis. The plot is drawn into a temporary file in the same folder (ending with the
+/// Writes the plot of `rows` to `path` (SVG or PNG by extension), with `axes[0]` as the
+/// vertical axis and [`panel_axes`] as the panels' horizontal ones. The plot is drawn into a temporary file in the same folder (ending with the
 /// same file name, so the format is the same) and renamed onto `path`: a failed or killed
 /// run never leaves a half-written plot, and on an error `path` is left as it was.
-pub fn write(rows: &[Row], error: Axis, path: &str) -> Result<()> {
+pub fn write(rows: &[Row], axes: &[Axis], path: &str) -> Result<()> {
     let format = PlotFormat::of(path).map_err(|m| plot_error(path, m))?;
+    let error = axes.first().copied().unwrap_or(Axis::Error);
+    let xs = panel_axes(axes);
+    let dims = size(xs.len());
     font();
     super::rows::write_via_temp(path, |tmp| match format {
         PlotFormat::Svg => {
-            let root = SVGBackend::new(tmp, SIZE).into_drawing_area();
-            draw(&root, rows, error).map_err(|e| plot_error(path, e))?;
+            let root = SVGBackend::new(tmp, dims).into_drawing_area();
+            draw(&root, rows, error, &xs).map_err(|e| plot_error(path, e))?;
             root.present().map_err(|e| plot_error(path, e))
         }
         PlotFormat::Png => {
-            let root = BitMapBackend::new(tmp, SIZE).into_drawing_area();
-            draw(&root, rows, error).map_err(|e| plot_error(path, e))?;
+            let root = BitMapBackend::new(tmp, dims).into_drawing_area();
+            draw(&root, rows, error, &xs).map_err(|e| plot_error(path, e))?;
             root.present().map_err(|e| plot_error(path, e))
         }
     })
@@ -121,14 +142,15 @@ fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     rows: &[Row],
     error: Axis,
+    xs: &[Axis],
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
-    let panels = root.split_evenly((1, 2));
+    let panels = root.split_evenly((1, xs.len()));
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     scenes.dedup();
     scenes.sort_unstable();
     scenes.dedup();
-    for (area, x_axis) in panels.iter().zip([Axis::Cost, Axis::Throughput]) {
+    for (area, &x_axis) in panels.iter().zip(xs) {
         let mut chart = ChartBuilder::on(area)
             .caption(
                 format!("{} vs {}", error.name(), x_axis.name()),

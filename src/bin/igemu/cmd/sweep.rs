@@ -30,7 +30,7 @@ pub struct SweepArgs {
     /// Configurations rendered in parallel (1 = serial; results are identical).
     #[arg(long, default_value_t = 1)]
     pub jobs: usize,
-    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker), truth_total, truth_algorithm, truth_quantisation (mean Weber against the depth-of-field truth; need --dof-truth).
+    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker), truth_total, truth_algorithm, truth_quantisation (mean Weber against the depth-of-field truth; need --dof-truth), emulator_time (the fixed models' ms).
     #[arg(long, default_value = "error,cost")]
     pub axes: String,
     /// Run every phase for every configuration (no stage reuse between configurations).
@@ -166,7 +166,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     );
     let rows = &summary.rows;
     if let Some(p) = &a.plot {
-        sweep::plot::write(rows, axes[0], p)?;
+        sweep::plot::write(rows, &axes, p)?;
     }
     let front = pareto::front(rows, &axes);
     outln!(
