@@ -745,3 +745,85 @@ mod kernels {
         }
     }
 }
+
+/// Floyd-Steinberg with the residual range kept in locals: the same codes and signal as the
+/// per-value recording it replaced (that loop, kept here as the reference).
+mod diffusion_stats {
+    use super::kernels::same_stats;
+    use super::*;
+    use igemu::fixed::{Quant, SignalStats, round_shift};
+    use igemu::stage::dither::{FsParams, floyd_steinberg};
+    use proptest::prelude::*;
+
+    fn reference(x: &[u32], width: u32, height: u32, p: &FsParams, out: &mut [u32]) -> SignalStats {
+        let mut st = SignalStats::new("dither.error", p.error);
+        let (w, fe) = (width as usize, p.error.frac_bits);
+        let up = fe - p.s;
+        let (lo, hi) = (p.error.min_code(), p.error.max_code());
+        let mut cur = vec![0i64; w + 2];
+        let mut next = vec![0i64; w + 2];
+        let mut overflows = 0u64;
+        let mut add = |slot: &mut i64, v: i64, inside: bool| {
+            let s = *slot + v;
+            if inside && (s < lo || s > hi) {
+                overflows += 1;
+            }
+            *slot = s.clamp(lo, hi);
+        };
+        for y in 0..height as usize {
+            let rev = p.serpentine && y % 2 == 1;
+            for k in 0..w {
+                let xi = if rev { w - 1 - k } else { k };
+                let v = ((x[y * w + xi] as i64) << up) + cur[xi + 1];
+                let q = ((v + (1i64 << (fe - 1))) >> fe).clamp(0, p.omax as i64);
+                out[y * w + xi] = q as u32;
+                let r = v - (q << fe);
+                st.record_code(r as i128);
+                let share = |m: i64| round_shift((m * r) as i128, 4, Quant::Rnd) as i64;
+                let (e7, e3, e5) = (share(7), share(3), share(5));
+                let e1 = r - e7 - e3 - e5;
+                let (ahead, behind) = if rev { (xi, xi + 2) } else { (xi + 2, xi) };
+                add(&mut cur[ahead], e7, (1..=w).contains(&ahead));
+                add(&mut next[behind], e3, (1..=w).contains(&behind));
+                add(&mut next[xi + 1], e5, true);
+                add(&mut next[ahead], e1, (1..=w).contains(&ahead));
+            }
+            std::mem::swap(&mut cur, &mut next);
+            next.iter_mut().for_each(|e| *e = 0);
+        }
+        st.add_overflows(overflows);
+        st
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        #[test]
+        fn floyd_steinberg_signal_matches_the_per_value_recording(
+            width in 0u32..40,
+            height in 0u32..12,
+            s in 0u32..6,
+            extra in 0u32..4,
+            int in 1u32..10,
+            dac in 1u32..10,
+            serpentine: bool,
+            seed: u64,
+        ) {
+            let p = FsParams {
+                s,
+                omax: (1 << dac) - 1,
+                error: QFormat::new(true, int, s + extra.max(1)),
+                serpentine,
+            };
+            let mut rng = Rng(seed | 1);
+            let x: Vec<u32> = (0..width * height)
+                .map(|_| (rng.next_u64() % (((p.omax as u64) + 2) << s)) as u32)
+                .collect();
+            let (mut a, mut b) = (vec![0u32; x.len()], vec![0u32; x.len()]);
+            let sa = floyd_steinberg(&x, width, height, &p, &mut a);
+            let sb = reference(&x, width, height, &p, &mut b);
+            prop_assert_eq!(a, b);
+            prop_assert!(same_stats(&sa, &sb), "{:?} vs {:?}", sa, sb);
+        }
+    }
+}
