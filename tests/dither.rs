@@ -464,3 +464,366 @@ fn slow_dark_ramp_contours_vanish_with_dither() {
         assert!(r.contour_map.iter().all(|&m| m < 2));
     }
 }
+
+/// The row-wise ordered kernels against the straightforward per-value form they replaced
+/// (kept here as the reference): codes, saturation counts and the reported signal, on the
+/// embedded scenes and on random frames, formats, output widths, masks and frames.
+mod kernels {
+    use super::*;
+    use igemu::fixed::SignalStats;
+    use igemu::scene::Scene;
+    use igemu::stage::StageId;
+    use igemu::stage::dither::{apply_ordered, apply_ordered_f64, apply_ordered_serial};
+    use proptest::prelude::*;
+    use std::sync::OnceLock;
+
+    /// Per value: [`ordered_code`] with the mask read at each pixel, saturated to `omax`.
+    pub fn reference(
+        x: &[u32],
+        width: u32,
+        s: u32,
+        omax: u32,
+        m: &Mask,
+        frame: u32,
+    ) -> (Vec<u32>, u64) {
+        let off = m.offset(frame);
+        let w = width.max(1) as usize;
+        let mut sat = 0;
+        let codes = x
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let c = ordered_code(v, s, m.at((i % w) as u32, (i / w) as u32, off), m.bits);
+                sat += u64::from(c > omax as u64);
+                c.min(omax as u64) as u32
+            })
+            .collect();
+        (codes, sat)
+    }
+
+    fn reference_f64(v: &[f64], width: u32, omax: u32, m: &Mask, frame: u32) -> Vec<u32> {
+        let off = m.offset(frame);
+        let w = width.max(1) as usize;
+        v.iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let r = m.at((i % w) as u32, (i / w) as u32, off);
+                ordered_f64(v, r, m.bits).clamp(0.0, omax as f64) as u32
+            })
+            .collect()
+    }
+
+    /// The signal the ordered dither reported before: output format, saturations only.
+    pub fn reference_stats(omax: u32, sat: u64) -> SignalStats {
+        let mut st = SignalStats::new(
+            "dither.out",
+            QFormat::new(false, 32 - omax.leading_zeros(), 0),
+        );
+        st.add_overflows(sat);
+        st
+    }
+
+    /// Every field, the float sums bit for bit.
+    pub fn same_stats(a: &SignalStats, b: &SignalStats) -> bool {
+        a.name == b.name
+            && a.format == b.format
+            && a.count == b.count
+            && a.min == b.min
+            && a.max == b.max
+            && a.overflows == b.overflows
+            && a.err_sum.to_bits() == b.err_sum.to_bits()
+            && a.err_sq_sum.to_bits() == b.err_sq_sum.to_bits()
+    }
+
+    fn masks() -> &'static [Mask] {
+        static M: OnceLock<Vec<Mask>> = OnceLock::new();
+        M.get_or_init(|| {
+            let mut v: Vec<Mask> = [1, 2, 4, 8, 16].into_iter().map(Mask::bayer).collect();
+            v.push(Mask::blue_noise(8, 3));
+            v.push(Mask::blue_noise(16, 1));
+            v
+        })
+    }
+
+    fn dithers() -> &'static [Dither] {
+        static D: OnceLock<Vec<Dither>> = OnceLock::new();
+        D.get_or_init(|| {
+            let mut v = vec![];
+            for kind in [
+                DitherKind::Bayer2,
+                DitherKind::Bayer4,
+                DitherKind::Bayer8,
+                DitherKind::BlueNoise,
+            ] {
+                for (temporal, frame) in [(false, 0), (true, 5), (true, 77)] {
+                    v.push(Dither::new(&DitherCfg {
+                        kind,
+                        temporal,
+                        frame,
+                        ..DitherCfg::default()
+                    }));
+                }
+            }
+            v
+        })
+    }
+
+    fn omax_of(class: u32, r: u32) -> u32 {
+        match class {
+            0 => 0,
+            1 => 1,
+            2 => 255,
+            3 => u32::MAX,
+            4 => (1u32 << (r % 32)) - 1,
+            _ => r,
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(400))]
+
+        #[test]
+        fn ordered_kernels_match_the_per_value_form(
+            mi in 0usize..7,
+            width in 0u32..80,
+            rows in 0u32..12,
+            tail in 0u32..80,
+            s in 0u32..34,
+            vshift in 0u32..32,
+            oclass in 0u32..6,
+            orand: u32,
+            frame in 0u32..600,
+            seed: u64,
+        ) {
+            let m = &masks()[mi];
+            let mut rng = Rng(seed | 1);
+            let len = (width.max(1) * rows + tail % width.max(1)) as usize;
+            let x: Vec<u32> = (0..len).map(|_| (rng.next_u64() as u32) >> vshift).collect();
+            let omax = omax_of(oclass, orand);
+            let (want, sat) = reference(&x, width, s, omax, m, frame);
+            let mut out = vec![7u32; len];
+            prop_assert_eq!(apply_ordered(&x, width, s, omax, m, frame, &mut out), sat);
+            prop_assert_eq!(&out, &want);
+            let mut out = vec![7u32; len];
+            prop_assert_eq!(apply_ordered_serial(&x, width, s, omax, m, frame, &mut out), sat);
+            prop_assert_eq!(&out, &want);
+            // The float reference on the same values as reals, and on odd reals.
+            let mut v: Vec<f64> = x.iter().map(|&c| c as f64 / (1u64 << s.min(31)) as f64).collect();
+            for (i, e) in v.iter_mut().enumerate() {
+                match rng.next_u64() % 16 {
+                    0 => *e = -*e,
+                    1 => *e = f64::NAN,
+                    2 => *e = if i % 2 == 0 { f64::INFINITY } else { f64::NEG_INFINITY },
+                    3 => *e = rng.range(-3.0, 300.0),
+                    _ => {}
+                }
+            }
+            prop_assert_eq!(apply_ordered_f64(&v, width, omax, m, frame), reference_f64(&v, width, omax, m, frame));
+        }
+
+        #[test]
+        fn dither_unit_codes_and_signal_match_the_per_value_form(
+            di in 0usize..12,
+            width in 1u32..70,
+            height in 0u32..10,
+            s in 0u32..9,
+            dac in 1u32..13,
+            seed: u64,
+        ) {
+            let d = &dithers()[di];
+            let m = d.mask.as_ref().unwrap();
+            let omax = (1u32 << dac) - 1;
+            let mut rng = Rng(seed | 1);
+            let x: Vec<u32> = (0..width * height).map(|_| (rng.next_u64() % ((omax as u64 + 2) << s)) as u32).collect();
+            let frame = if d.cfg.temporal { d.cfg.frame } else { 0 };
+            let (want, sat) = reference(&x, width, s, omax, m, frame);
+            for serial in [false, true] {
+                let mut out = vec![0u32; x.len()];
+                let st = if serial {
+                    d.apply_serial(&x, width, height, s, omax, &mut out)
+                } else {
+                    d.apply(&x, width, height, s, omax, &mut out)
+                };
+                prop_assert_eq!(&out, &want);
+                prop_assert!(same_stats(&st, &reference_stats(omax, sat)), "{:?}", st);
+            }
+        }
+    }
+
+    /// Frames larger than one parallel band (several bands, rows not a multiple of a band).
+    #[test]
+    fn large_frames_match_over_several_bands() {
+        let mut rng = Rng(99);
+        for (mi, (w, h)) in [
+            (0usize, (300u32, 701u32)),
+            (3, (1021, 131)),
+            (6, (64, 2000)),
+        ] {
+            let m = &masks()[mi];
+            let x: Vec<u32> = (0..w * h).map(|_| (rng.next_u64() % 4200) as u32).collect();
+            let (want, sat) = reference(&x, w, 4, 255, m, 3);
+            let mut out = vec![0u32; x.len()];
+            assert_eq!(apply_ordered(&x, w, 4, 255, m, 3, &mut out), sat);
+            assert_eq!(out, want);
+            assert!(sat > 0);
+        }
+    }
+
+    /// The embedded scenes through the pipeline: the dither stage's codes and signal, and the
+    /// gamma LUT's codes, against the per-value forms on the stages' own inputs.
+    #[test]
+    fn embedded_scenes_match_the_per_value_forms() {
+        use igemu::stage::gamma::{GammaSpec, extended_lut, reduced_lut};
+        for name in ["default", "cone-focus"] {
+            let sc = Scene::embedded(name).unwrap();
+            for (kind, placement) in [
+                (DitherKind::Bayer8, Placement::AfterLut),
+                (DitherKind::BlueNoise, Placement::BeforeLut),
+                (DitherKind::Bayer4, Placement::BeforeLut),
+            ] {
+                let h = hw("linear12", |h| {
+                    h.dither.kind = kind;
+                    h.dither.placement = placement;
+                });
+                let r = render(&sc, &h, RunOptions::default()).unwrap();
+                let at = |id: StageId| r.steps.iter().position(|s| s.id == id).unwrap();
+                let (di, gi) = (at(StageId::Dither), at(StageId::Gamma));
+                let before = &r.steps[di - 1].outcome.taps;
+                let f = h.dither.frac_bits;
+                let ff = h.accumulate.frame.format;
+                let (din, s, omax): (&[u32], u32, u32) = match placement {
+                    Placement::AfterLut => {
+                        let px = before.fixed.pixels();
+                        (&px.codes, px.frac, px.max)
+                    }
+                    Placement::BeforeLut => (
+                        &before.fixed.frame().frame.acc,
+                        f + ff.frac_bits,
+                        (1u32 << (ff.int_bits - f)) - 1,
+                    ),
+                };
+                let d = Dither::new(&h.dither);
+                let (want, sat) =
+                    reference(din, sc.image.width, s, omax, d.mask.as_ref().unwrap(), 0);
+                let dout = &r.steps[di].outcome;
+                assert_eq!(
+                    dout.taps.fixed.pixels().codes,
+                    want,
+                    "{name} {kind:?} {placement:?}"
+                );
+                assert!(same_stats(
+                    &dout.report.signals[0],
+                    &reference_stats(omax, sat)
+                ));
+                // The gamma LUT, per value, on its own input.
+                let spec = GammaSpec::of(&sc, &h);
+                let gin = &r.steps[gi - 1].outcome.taps;
+                let gout = &r.steps[gi].outcome.taps.fixed.pixels().codes;
+                let want: Vec<u32> = match placement {
+                    Placement::AfterLut => {
+                        let lut = extended_lut(&spec, ff.int_bits, f);
+                        gin.fixed
+                            .frame()
+                            .frame
+                            .acc
+                            .iter()
+                            .map(|&a| lut[((a >> ff.frac_bits) as usize).min(lut.len() - 1)])
+                            .collect()
+                    }
+                    Placement::BeforeLut => {
+                        let lut = reduced_lut(&spec, ff.int_bits, f);
+                        gin.fixed
+                            .pixels()
+                            .codes
+                            .iter()
+                            .map(|&a| lut.table[a as usize] as u32)
+                            .collect()
+                    }
+                };
+                assert_eq!(gout, &want, "{name} {kind:?} {placement:?}: gamma");
+            }
+        }
+    }
+}
+
+/// Floyd-Steinberg with the residual range kept in locals: the same codes and signal as the
+/// per-value recording it replaced (that loop, kept here as the reference).
+mod diffusion_stats {
+    use super::kernels::same_stats;
+    use super::*;
+    use igemu::fixed::{Quant, SignalStats, round_shift};
+    use igemu::stage::dither::{FsParams, floyd_steinberg};
+    use proptest::prelude::*;
+
+    fn reference(x: &[u32], width: u32, height: u32, p: &FsParams, out: &mut [u32]) -> SignalStats {
+        let mut st = SignalStats::new("dither.error", p.error);
+        let (w, fe) = (width as usize, p.error.frac_bits);
+        let up = fe - p.s;
+        let (lo, hi) = (p.error.min_code(), p.error.max_code());
+        let mut cur = vec![0i64; w + 2];
+        let mut next = vec![0i64; w + 2];
+        let mut overflows = 0u64;
+        let mut add = |slot: &mut i64, v: i64, inside: bool| {
+            let s = *slot + v;
+            if inside && (s < lo || s > hi) {
+                overflows += 1;
+            }
+            *slot = s.clamp(lo, hi);
+        };
+        for y in 0..height as usize {
+            let rev = p.serpentine && y % 2 == 1;
+            for k in 0..w {
+                let xi = if rev { w - 1 - k } else { k };
+                let v = ((x[y * w + xi] as i64) << up) + cur[xi + 1];
+                let q = ((v + (1i64 << (fe - 1))) >> fe).clamp(0, p.omax as i64);
+                out[y * w + xi] = q as u32;
+                let r = v - (q << fe);
+                st.record_code(r as i128);
+                let share = |m: i64| round_shift((m * r) as i128, 4, Quant::Rnd) as i64;
+                let (e7, e3, e5) = (share(7), share(3), share(5));
+                let e1 = r - e7 - e3 - e5;
+                let (ahead, behind) = if rev { (xi, xi + 2) } else { (xi + 2, xi) };
+                add(&mut cur[ahead], e7, (1..=w).contains(&ahead));
+                add(&mut next[behind], e3, (1..=w).contains(&behind));
+                add(&mut next[xi + 1], e5, true);
+                add(&mut next[ahead], e1, (1..=w).contains(&ahead));
+            }
+            std::mem::swap(&mut cur, &mut next);
+            next.iter_mut().for_each(|e| *e = 0);
+        }
+        st.add_overflows(overflows);
+        st
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        #[test]
+        fn floyd_steinberg_signal_matches_the_per_value_recording(
+            width in 0u32..40,
+            height in 0u32..12,
+            s in 0u32..6,
+            extra in 0u32..4,
+            int in 1u32..10,
+            dac in 1u32..10,
+            serpentine: bool,
+            seed: u64,
+        ) {
+            let p = FsParams {
+                s,
+                omax: (1 << dac) - 1,
+                error: QFormat::new(true, int, s + extra.max(1)),
+                serpentine,
+            };
+            let mut rng = Rng(seed | 1);
+            let x: Vec<u32> = (0..width * height)
+                .map(|_| (rng.next_u64() % (((p.omax as u64) + 2) << s)) as u32)
+                .collect();
+            let (mut a, mut b) = (vec![0u32; x.len()], vec![0u32; x.len()]);
+            let sa = floyd_steinberg(&x, width, height, &p, &mut a);
+            let sb = reference(&x, width, height, &p, &mut b);
+            prop_assert_eq!(a, b);
+            prop_assert!(same_stats(&sa, &sb), "{:?} vs {:?}", sa, sb);
+        }
+    }
+}

@@ -63,6 +63,18 @@ impl SignalStats {
         self.max = Some(self.max.map_or(code, |m| m.max(code)));
     }
 
+    /// Records a block of `count` error-free values whose range is `[min, max]` (what
+    /// `count` calls of [`SignalStats::record_code`] would record); nothing when `count` is 0.
+    #[inline]
+    pub fn record_range(&mut self, count: u64, min: i128, max: i128) {
+        if count == 0 {
+            return;
+        }
+        self.count += count;
+        self.min = Some(self.min.map_or(min, |m| m.min(min)));
+        self.max = Some(self.max.map_or(max, |m| m.max(max)));
+    }
+
     /// Adds overflows detected elsewhere (e.g. by a saturating accumulator).
     #[inline]
     pub fn add_overflows(&mut self, n: u64) {

@@ -31,6 +31,8 @@ pub fn floyd_steinberg(
     let mut cur = vec![0i64; w + 2];
     let mut next = vec![0i64; w + 2];
     let mut overflows = 0u64;
+    // The residuals' range, in locals (recorded once at the end, not per value).
+    let (mut rmin, mut rmax) = (i64::MAX, i64::MIN);
     let mut add = |slot: &mut i64, v: i64, inside: bool| {
         let s = *slot + v;
         if inside && (s < lo || s > hi) {
@@ -46,7 +48,8 @@ pub fn floyd_steinberg(
             let q = ((v + (1i64 << (fe - 1))) >> fe).clamp(0, p.omax as i64);
             out[y * w + xi] = q as u32;
             let r = v - (q << fe);
-            st.record_code(r as i128);
+            rmin = rmin.min(r);
+            rmax = rmax.max(r);
             let share = |m: i64| round_shift((m * r) as i128, 4, Quant::Rnd) as i64;
             let (e7, e3, e5) = (share(7), share(3), share(5));
             let e1 = r - e7 - e3 - e5;
@@ -60,6 +63,11 @@ pub fn floyd_steinberg(
         std::mem::swap(&mut cur, &mut next);
         next.iter_mut().for_each(|e| *e = 0);
     }
+    st.record_range(
+        (w * height as usize) as u64,
+        i128::from(rmin),
+        i128::from(rmax),
+    );
     st.add_overflows(overflows);
     st
 }

@@ -17,8 +17,80 @@ pub fn ordered_f64(v: f64, rank: u32, bits: u32) -> f64 {
     (v + (rank as f64 + 0.5) / (1u64 << bits) as f64).floor()
 }
 
+/// The integer threshold of rank `m` for inputs with `s < 32` fraction bits: with
+/// `x = q * 2^s + r` (`r < 2^s`), [`ordered_code`] is `q + (r >= t)` where
+/// `t = 2^s - floor((2m + 1) * 2^s / 2^(b+1))`, in `1..=2^s` (the sum's fraction part
+/// `r / 2^s + (2m + 1) / 2^(b+1)` reaches 1 exactly when `r` reaches `t`).
+#[inline]
+pub fn rank_threshold(s: u32, rank: u32, bits: u32) -> u32 {
+    let one = 1u64 << s;
+    (one - (((2 * rank as u64 + 1) << s) >> (bits + 1))) as u32
+}
+
+/// The per-column thresholds of one mask row, repeated to a multiple of the mask side at
+/// least [`ROW_SPAN`] long (so the row kernel runs over long slices), for every mask row:
+/// `rows[ry * span + j]` is the threshold at column `j` (mod span) of an image row that
+/// reads mask row `ry`, with the mask offset `off` applied.
+struct ThresholdRows {
+    span: usize,
+    rows: Vec<u32>,
+}
+
+/// Minimum length of a precomputed threshold row.
+const ROW_SPAN: usize = 256;
+
+impl ThresholdRows {
+    fn new(mask: &Mask, s: u32, off: (u32, u32)) -> Self {
+        let n = mask.n.max(1) as usize;
+        let span = ROW_SPAN.max(n).div_ceil(n) * n;
+        let t: Vec<u32> = mask
+            .rank
+            .iter()
+            .map(|&r| rank_threshold(s, r, mask.bits))
+            .collect();
+        let m = n - 1;
+        let rows = (0..n)
+            .flat_map(|ry| {
+                let t = &t;
+                (0..span).map(move |j| t[ry * n + ((j + off.0 as usize) & m)])
+            })
+            .collect();
+        Self { span, rows }
+    }
+
+    /// The thresholds of image row `y` (mask row `(y + off_y) mod n`).
+    fn row(&self, y: usize, off_y: u32, n: u32) -> &[u32] {
+        let ry = (y + off_y as usize) & (n as usize - 1);
+        &self.rows[ry * self.span..(ry + 1) * self.span]
+    }
+}
+
+/// One row of the ordered dither over slices: `out[i] = min(q + (r >= thr[i]), omax)` with
+/// `x[i] = q * 2^s + r` (`s < 32`); returns the number of saturations. `thr` is indexed
+/// modulo its length (a multiple of the mask side).
+#[inline]
+fn ordered_row(x: &[u32], thr: &[u32], s: u32, omax: u32, out: &mut [u32]) -> u64 {
+    let low = ((1u64 << s) - 1) as u32;
+    let mut sat = 0u64;
+    for (o, xs) in out.chunks_mut(thr.len()).zip(x.chunks(thr.len())) {
+        let len = o.len().min(xs.len());
+        let (o, xs, thr) = (&mut o[..len], &xs[..len], &thr[..len]);
+        let mut n = 0u32;
+        for i in 0..len {
+            let v = xs[i];
+            let c = (v >> s) + u32::from(v & low >= thr[i]);
+            n += u32::from(c > omax);
+            o[i] = c.min(omax);
+        }
+        sat += u64::from(n);
+    }
+    sat
+}
+
 /// Applies an ordered mask to a `width`-wide image of `s`-fraction-bit codes; returns the
-/// codes saturated to `omax` and the number of saturations.
+/// codes saturated to `omax` and the number of saturations. Row-wise over slices with the
+/// mask rows' thresholds precomputed ([`rank_threshold`]), bands of rows in parallel; the
+/// same codes and count as [`ordered_code`] per pixel.
 pub fn apply_ordered(
     x: &[u32],
     width: u32,
@@ -28,34 +100,106 @@ pub fn apply_ordered(
     frame: u32,
     out: &mut [u32],
 ) -> u64 {
-    let off = mask.offset(frame);
-    let w = width.max(1) as usize;
-    out.par_chunks_mut(w)
-        .zip(x.par_chunks(w))
-        .enumerate()
-        .map(|(y, (o, xr))| {
-            let mut sat = 0;
-            for (i, (o, &v)) in o.iter_mut().zip(xr).enumerate() {
-                let c = ordered_code(v, s, mask.at(i as u32, y as u32, off), mask.bits);
-                if c > omax as u64 {
-                    sat += 1;
-                }
-                *o = c.min(omax as u64) as u32;
-            }
-            sat
-        })
-        .sum()
+    ordered(x, width, s, omax, mask, frame, out, true)
 }
 
-/// Float reference of [`apply_ordered`] on real values (output LSBs).
+/// [`apply_ordered`] on the calling thread only (the same codes and count).
+pub fn apply_ordered_serial(
+    x: &[u32],
+    width: u32,
+    s: u32,
+    omax: u32,
+    mask: &Mask,
+    frame: u32,
+    out: &mut [u32],
+) -> u64 {
+    ordered(x, width, s, omax, mask, frame, out, false)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn ordered(
+    x: &[u32],
+    width: u32,
+    s: u32,
+    omax: u32,
+    mask: &Mask,
+    frame: u32,
+    out: &mut [u32],
+    parallel: bool,
+) -> u64 {
+    let off = mask.offset(frame);
+    let w = width.max(1) as usize;
+    if s >= 32 || !mask.n.is_power_of_two() {
+        return apply_ordered_per_value(x, w, s, omax, mask, off, out);
+    }
+    let thr = ThresholdRows::new(mask, s, off);
+    let band = (BAND_PIXELS / w).max(1);
+    let run = |b: usize, o: &mut [u32], xb: &[u32]| -> u64 {
+        o.chunks_mut(w)
+            .zip(xb.chunks(w))
+            .enumerate()
+            .map(|(k, (o, xr))| ordered_row(xr, thr.row(b * band + k, off.1, mask.n), s, omax, o))
+            .sum()
+    };
+    if parallel {
+        out.par_chunks_mut(w * band)
+            .zip(x.par_chunks(w * band))
+            .enumerate()
+            .map(|(b, (o, xb))| run(b, o, xb))
+            .sum()
+    } else {
+        run(0, out, x)
+    }
+}
+
+/// Pixels per parallel band of [`apply_ordered`] (whole rows).
+const BAND_PIXELS: usize = 1 << 16;
+
+/// The per-value form (inputs with 32 or more fraction bits).
+fn apply_ordered_per_value(
+    x: &[u32],
+    w: usize,
+    s: u32,
+    omax: u32,
+    mask: &Mask,
+    off: (u32, u32),
+    out: &mut [u32],
+) -> u64 {
+    let mut sat = 0;
+    for (i, (o, &v)) in out.iter_mut().zip(x).enumerate() {
+        let c = ordered_code(
+            v,
+            s,
+            mask.at((i % w) as u32, (i / w) as u32, off),
+            mask.bits,
+        );
+        sat += u64::from(c > omax as u64);
+        *o = c.min(omax as u64) as u32;
+    }
+    sat
+}
+
+/// Float reference of [`apply_ordered`] on real values (output LSBs): [`ordered_f64`] per
+/// pixel, with each rank's threshold `(m + 0.5) / 2^b` computed once (the same `f64`).
 pub fn apply_ordered_f64(v: &[f64], width: u32, omax: u32, mask: &Mask, frame: u32) -> Vec<u32> {
     let off = mask.offset(frame);
     let w = width.max(1) as usize;
-    v.par_iter()
+    let t: Vec<f64> = mask
+        .rank
+        .iter()
+        .map(|&r| (r as f64 + 0.5) / (1u64 << mask.bits) as f64)
+        .collect();
+    let (n, m) = (mask.n as usize, mask.n as usize - 1);
+    let mut out = vec![0u32; v.len()];
+    out.par_chunks_mut(w)
+        .zip(v.par_chunks(w))
         .enumerate()
-        .map(|(i, &v)| {
-            let r = mask.at((i % w) as u32, (i / w) as u32, off);
-            ordered_f64(v, r, mask.bits).clamp(0.0, omax as f64) as u32
-        })
-        .collect()
+        .for_each(|(y, (o, vr))| {
+            let tr = &t[((y + off.1 as usize) & m) * n..][..n];
+            for (i, (o, &v)) in o.iter_mut().zip(vr).enumerate() {
+                let th = tr[(i + off.0 as usize) & m];
+                *o = (v + th).floor().clamp(0.0, omax as f64) as u32;
+            }
+        });
+    out
 }

@@ -3,7 +3,7 @@
 
 use super::diffusion::{FsParams, floyd_steinberg, floyd_steinberg_f64};
 use super::mask::Mask;
-use super::ordered::{apply_ordered, apply_ordered_f64, ordered_code};
+use super::ordered::{apply_ordered, apply_ordered_f64, apply_ordered_serial, ordered_code};
 use crate::config::DitherCfg;
 use crate::fixed::{QFormat, SignalStats};
 use crate::stage::{Cost, MemImage, Memory, Unit};
@@ -47,12 +47,7 @@ impl Dither {
         match &self.mask {
             Some(m) => {
                 let sat = apply_ordered(x, width, s, omax, m, self.frame(), out);
-                let mut st = SignalStats::new(
-                    "dither.out",
-                    QFormat::new(false, 32 - omax.leading_zeros(), 0),
-                );
-                st.add_overflows(sat);
-                st
+                ordered_stats(omax, sat)
             }
             None => floyd_steinberg(
                 x,
@@ -66,6 +61,25 @@ impl Dither {
                 },
                 out,
             ),
+        }
+    }
+
+    /// [`Dither::apply`] on the calling thread only (the same codes and statistics).
+    pub fn apply_serial(
+        &self,
+        x: &[u32],
+        width: u32,
+        height: u32,
+        s: u32,
+        omax: u32,
+        out: &mut [u32],
+    ) -> SignalStats {
+        match &self.mask {
+            Some(m) => {
+                let sat = apply_ordered_serial(x, width, s, omax, m, self.frame(), out);
+                ordered_stats(omax, sat)
+            }
+            None => self.apply(x, width, height, s, omax, out),
         }
     }
 
@@ -127,6 +141,16 @@ impl Dither {
             }
         }
     }
+}
+
+/// The ordered dither's signal: the output format and its saturations.
+fn ordered_stats(omax: u32, sat: u64) -> SignalStats {
+    let mut st = SignalStats::new(
+        "dither.out",
+        QFormat::new(false, 32 - omax.leading_zeros(), 0),
+    );
+    st.add_overflows(sat);
+    st
 }
 
 /// The temporal-dither check: a static frame over one period of the mask.

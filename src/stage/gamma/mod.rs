@@ -110,10 +110,12 @@ impl GammaLut {
     /// Applies the LUT to frame codes (`frac_bits` of the frame are dropped by truncation
     /// of the address, i.e. the LUT is addressed by the integer part).
     pub fn apply(&self, acc: &[u32], frac_bits: u32, out: &mut [u16]) {
-        let max = self.table.len() - 1;
-        out.par_iter_mut().zip(acc.par_iter()).for_each(|(o, &a)| {
-            *o = self.table[((a >> frac_bits) as usize).min(max)];
-        });
+        lookup(&self.table, acc, frac_bits, out);
+    }
+
+    /// [`GammaLut::apply`] into 32-bit pixel codes (the pixel tap's type).
+    pub fn apply_u32(&self, acc: &[u32], frac_bits: u32, out: &mut [u32]) {
+        lookup(&self.table, acc, frac_bits, out);
     }
 
     /// Cost: one ROM (named `name`) and its address register.
@@ -165,7 +167,9 @@ pub fn powers(frame_ref: &[f64], hw: &HwConfig, spec: &GammaSpec) -> Vec<f64> {
         .collect()
 }
 
+mod kernel;
 mod luts;
 mod stage;
+pub use kernel::{BLOCK, lookup, lookup_block};
 pub use luts::{extended_lut, reduced_lut};
 pub use stage::Gamma;

@@ -3,7 +3,7 @@
 //! before it; the eq. 15 LUT of a log-coded frame), its float reference and its
 //! stage-local comparison.
 
-use super::{GammaLut, GammaSpec, apply_powers, powers, powers_key};
+use super::{GammaLut, GammaSpec, apply_powers, lookup, powers, powers_key};
 use super::{extended_lut, reduced_lut};
 use crate::config::HwConfig;
 use crate::error::Result;
@@ -83,10 +83,8 @@ impl Stage for Gamma {
             let f = hw.dither.frac_bits;
             let lut = reduced_lut(&spec, acc_bits, f);
             let addr = &taps.fixed.pixels().codes;
-            let codes = addr
-                .par_iter()
-                .map(|&a| lut.table[a as usize] as u32)
-                .collect();
+            let mut codes = vec![0u32; addr.len()];
+            lookup(&lut.table, addr, 0, &mut codes);
             facts.note("monotone", lut.is_monotone());
             (Lut::Reduced(Arc::new(lut), f), codes, 0)
         } else {
@@ -95,11 +93,8 @@ impl Stage for Gamma {
             match &frame.coding {
                 FrameCoding::Log(add) => {
                     let lut = log_gamma_lut(add, &spec);
-                    let max = lut.len() - 1;
-                    let codes = acc
-                        .par_iter()
-                        .map(|&c| lut[(c as usize).min(max)] as u32)
-                        .collect();
+                    let mut codes = vec![0u32; acc.len()];
+                    lookup(&lut, acc, 0, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("log_input_eq15", true);
                     (Lut::Log(Arc::new(lut), add.clone()), codes, 0)
@@ -107,19 +102,16 @@ impl Stage for Gamma {
                 FrameCoding::Linear if dither_after => {
                     let f = hw.dither.frac_bits;
                     let lut = extended_lut(&spec, acc_bits, f);
-                    let amax = lut.len() - 1;
-                    let codes = acc
-                        .par_iter()
-                        .map(|&a| lut[((a >> frac) as usize).min(amax)])
-                        .collect();
+                    let mut codes = vec![0u32; acc.len()];
+                    lookup(&lut, acc, frac, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
                     (Lut::Extended(Arc::new(lut), f), codes, f)
                 }
                 FrameCoding::Linear => {
                     let lut = GammaLut::build(&spec, acc_bits);
-                    let mut dac = vec![0u16; acc.len()];
-                    lut.apply(acc, frac, &mut dac);
+                    let mut codes = vec![0u32; acc.len()];
+                    lut.apply_u32(acc, frac, &mut codes);
                     facts.note("monotone", lut.is_monotone());
                     let unreachable = lut.unreachable_codes();
                     facts.note("unreachable_dac_codes", unreachable.len() as u64);
@@ -127,11 +119,7 @@ impl Stage for Gamma {
                         "first_unreachable",
                         unreachable.iter().take(16).collect::<Vec<_>>(),
                     );
-                    (
-                        Lut::Plain(Arc::new(lut)),
-                        dac.into_iter().map(u32::from).collect(),
-                        0,
-                    )
+                    (Lut::Plain(Arc::new(lut)), codes, 0)
                 }
             }
         };
