@@ -1,4 +1,5 @@
-//! Accumulate (tent filter, 4x4 samples, 640x480) on the default scene: fixed vs float.
+//! Accumulate (tent filter, 4x4 samples, 640x480) on the default scene: fixed (the whole
+//! region, and the binned tiles as the stage runs it) vs float (the whole region).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use igemu::config::HwConfig;
@@ -34,6 +35,16 @@ fn bench(c: &mut Criterion) {
     g.sample_size(20);
     g.bench_function("fixed/linear12/tent4x4", |b| {
         b.iter(|| black_box(accumulate::accumulate(samples, &region, &[], &ap, 0, (w, h)).unwrap()))
+    });
+    // What the stage runs: the binned tiles only (the rest takes the background code).
+    let tiles = &plan.layout.tiles;
+    g.bench_function("fixed/linear12/tent4x4/binned", |b| {
+        b.iter(|| {
+            black_box(
+                accumulate::accumulate_tiles(samples, &region, Some(tiles), &[], &ap, 0, (w, h))
+                    .unwrap(),
+            )
+        })
     });
     g.bench_function("float/f64/tent4x4", |b| {
         b.iter(|| black_box(accumulate::accumulate_f64(&iv, &reg, &region, &[], &ar)))

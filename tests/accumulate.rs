@@ -118,3 +118,267 @@ fn saturation_at_full_white_under_many_overlapping_lights() {
         Ok(_) => panic!("ERROR mode must stop"),
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// The fast fixed kernel against the straightforward one.
+
+use igemu::fixed::{SignalStats, round_shift_i64};
+use igemu::stage::accumulate::{self as acc, AccParams, AccWork, Frame, PointFrags};
+use igemu::stage::visibility::{BACKGROUND, Samples};
+use igemu::stage::{Region, StageId, Tiles};
+use std::collections::BTreeMap;
+
+type Out = (Frame, AccWork, Vec<SignalStats>, Vec<u64>);
+
+/// The straightforward fixed model (the implementation before the window kernel): every
+/// pixel's window grouped by primitive in a map (samples of zero weight skipped), each sum
+/// rounded once and added in id order, the statistics recorded per row and merged in row
+/// order; then the light points.
+fn reference(
+    s: &Samples,
+    region: &Region,
+    tiles: Option<&Tiles>,
+    points: &[PointFrags<u32>],
+    p: &AccParams,
+    bg_i: u32,
+    size: (u32, u32),
+) -> igemu::error::Result<Out> {
+    let k = &p.kernel;
+    let sh = p.product_shift();
+    let product = |sum: i64, st: &mut SignalStats| -> i64 {
+        if sh <= 0 {
+            let v = (sum as i128) << (-sh);
+            st.record(v as f64, v, false);
+            v as i64
+        } else {
+            let r = round_shift_i64(sum, sh as u32, p.frame.quant) as i128;
+            st.record(sum as f64 / (1u64 << sh) as f64, r, false);
+            r as i64
+        }
+    };
+    let add = |a: i64, part: i64, ov: &mut u64| -> igemu::error::Result<i64> {
+        let q = p.frame.handle_overflow(a as i128 + part as i128);
+        if q.overflow {
+            *ov += 1;
+            if p.frame.overflow == Overflow::Error {
+                return Err(igemu::error::Error::Overflow {
+                    signal: "accumulate.frame".into(),
+                    format: p.frame.format.to_string(),
+                    value: a as i128 + part as i128,
+                    min: p.frame.format.min_code(),
+                    max: p.frame.format.max_code(),
+                });
+            }
+        }
+        Ok(q.code)
+    };
+    let (width, height) = size;
+    let npix = width as usize * height as usize;
+    let bg = p.background_code(bg_i)?;
+    let mut f = Frame {
+        width,
+        height,
+        acc: vec![bg; npix],
+        depth: vec![u32::MAX; npix],
+        coverage: vec![0; npix],
+    };
+    let mut work = AccWork::default();
+    let mut stats = SignalStats::new("accumulate.product", p.frame.format);
+    let mut frame_stats = SignalStats::new("accumulate.frame", p.frame.format);
+    let mut rmw = vec![0u64; tiles.map_or(0, |t| t.touched.len())];
+    let sw = s.reg.width();
+    let n = k.n as usize;
+    for py in region.y0..region.y1 {
+        let mut row_stats = SignalStats::new("accumulate.product", p.frame.format);
+        for px in region.x0..region.x1 {
+            if tiles.is_some_and(|t| !t.is_touched(px, py)) {
+                continue;
+            }
+            work.pixels += 1;
+            let c0 = (px as i64 * k.n as i64 - k.off - s.reg.c0) as usize;
+            let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
+            let mut groups: BTreeMap<u32, i64> = BTreeMap::new();
+            for j in 0..k.size {
+                for i in 0..k.size {
+                    let w = k.w[j * k.size + i];
+                    if w != 0 {
+                        let at = (r0 + j) * sw + c0 + i;
+                        *groups.entry(s.prim[at]).or_default() += w as i64 * s.i[at] as i64;
+                    }
+                }
+            }
+            work.macs += (k.size * k.size) as u64;
+            let mut a = 0i64;
+            for &sum in groups.values() {
+                let part = product(sum, &mut row_stats);
+                a = add(a, part, &mut work.overflows)?;
+            }
+            work.fragments += groups.len() as u64;
+            if let Some(t) = tiles {
+                rmw[t.index(px, py)] += groups.len() as u64;
+            }
+            let (mut zmin, mut cov) = (u32::MAX, 0u16);
+            for j in 0..n {
+                for i in 0..n {
+                    let at = (r0 + k.off as usize + j) * sw + c0 + k.off as usize + i;
+                    if s.prim[at] != BACKGROUND {
+                        cov += 1;
+                        zmin = zmin.min(s.z[at]);
+                    }
+                }
+            }
+            let at = py as usize * width as usize + px as usize;
+            f.acc[at] = a as u32;
+            f.depth[at] = zmin;
+            f.coverage[at] = cov;
+        }
+        stats.merge(&row_stats);
+    }
+    for pt in points {
+        for (px, py, sw_sum) in acc::point_weights(pt, &s.reg, region, k, |e| k.w[e] as f64) {
+            let part = product(pt.i as i64 * sw_sum as i64, &mut stats);
+            let at = py as usize * width as usize + px as usize;
+            f.acc[at] = add(f.acc[at] as i64, part, &mut work.overflows)? as u32;
+            work.point_updates += 1;
+            if let Some(t) = tiles {
+                rmw[t.index(px, py)] += 1;
+            }
+        }
+    }
+    for &a in &f.acc {
+        frame_stats.record_code(a as i128);
+    }
+    frame_stats.add_overflows(work.overflows);
+    Ok((f, work, vec![stats, frame_stats], rmw))
+}
+
+/// Runs the fast and the straightforward fixed models on a scene's fixed samples (binned
+/// tiles and the whole region) and asserts every output, count and statistic is identical.
+fn assert_same_as_reference(s: &igemu::scene::Scene, h: &igemu::config::HwConfig, what: &str) {
+    let (plan, taps) =
+        igemu::pipeline::run_through(s, h, RunOptions::FAST, StageId::Visibility).expect(what);
+    let tap = taps.fixed.samples();
+    let p = AccParams {
+        kernel: acc::kernel(h),
+        i_frac: h.input.intensity.format.frac_bits,
+        frame: h.accumulate.frame,
+    };
+    let size = (plan.layout.grid.width, plan.layout.grid.height);
+    let l = &plan.layout;
+    for tiles in [Some(&l.tiles), None] {
+        let fast = acc::accumulate_tiles(
+            &tap.samples,
+            &l.region,
+            tiles,
+            &tap.points,
+            &p,
+            tap.bg,
+            size,
+        );
+        let slow = reference(
+            &tap.samples,
+            &l.region,
+            tiles,
+            &tap.points,
+            &p,
+            tap.bg,
+            size,
+        );
+        match (fast, slow) {
+            (Ok(a), Ok(b)) => {
+                assert!(
+                    a.0 == b.0,
+                    "{what}: frame differs (tiles {})",
+                    tiles.is_some()
+                );
+                assert_eq!(a.1, b.1, "{what}: work");
+                assert_eq!(
+                    format!("{:?}", a.2),
+                    format!("{:?}", b.2),
+                    "{what}: signals"
+                );
+                assert_eq!(a.3, b.3, "{what}: frame writes per tile");
+            }
+            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{what}"),
+            (a, b) => panic!(
+                "{what}: fast ok {} vs reference ok {}",
+                a.is_ok(),
+                b.is_ok()
+            ),
+        }
+    }
+}
+
+fn embedded(name: &str, size: Option<(u32, u32)>) -> igemu::scene::Scene {
+    let mut s = igemu::scene::Scene::embedded(name).expect("embedded scene");
+    if let Some((w, h)) = size {
+        s.image.width = w;
+        s.image.height = h;
+    }
+    s
+}
+
+#[test]
+fn fast_kernel_matches_the_reference_on_the_embedded_scenes() {
+    for name in ["default", "default-pinhole", "cone-focus"] {
+        for preset in ["linear12", "log8-potentiate", "log8-logadd"] {
+            let s = embedded(name, None);
+            let h = hw(preset, |_| {});
+            assert_same_as_reference(&s, &h, &format!("{name} {preset}"));
+        }
+    }
+}
+
+#[test]
+fn fast_kernel_matches_the_reference_for_every_filter_and_sample_count() {
+    for name in ["default", "default-pinhole", "cone-focus"] {
+        let s = embedded(name, Some((160, 120)));
+        for filter in [FilterKind::Box, FilterKind::Tent, FilterKind::Gaussian] {
+            for n in [1u32, 2, 4, 8] {
+                for preset in ["linear12", "log8-potentiate", "log8-logadd"] {
+                    let h = hw(preset, |h| {
+                        h.accumulate.filter = filter;
+                        h.raster.samples = n;
+                        h.accumulate.weight_bits =
+                            h.accumulate.weight_bits.max(2 * n.trailing_zeros());
+                    });
+                    assert_same_as_reference(&s, &h, &format!("{name} {preset} {filter:?} n={n}"));
+                }
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Random small scenes (overlapping triangles and light points), every filter and sample
+    /// count, frame formats and overflow modes: the fast kernel equals the reference.
+    #[test]
+    fn fast_kernel_matches_the_reference_on_random_scenes(
+        tris in prop::collection::vec((0.0f64..24.0, 0.0f64..24.0, 0.0f64..24.0, 0.0f64..24.0,
+            0.0f64..24.0, 0.0f64..24.0, 0.05f64..0.95, 0.0f64..1.0), 1..12),
+        pts in prop::collection::vec((0.0f64..24.0, 0.0f64..24.0, 0.05f64..1.0, 0.1f64..3.0), 0..4),
+        filter in 0usize..3, n_log in 0u32..4, frac in 0u32..16, wb in 0u32..10,
+        overflow in 0usize..5, bg in 0.0f64..0.5,
+    ) {
+        let mut objects = String::new();
+        for (k, t) in tris.iter().enumerate() {
+            let z = 0.2 + 0.05 * k as f64;
+            objects += &tri([[t.0, t.1, z], [t.2, t.3, z + 0.1], [t.4, t.5, z]], [t.6, t.7, t.6]);
+        }
+        for p in &pts {
+            objects += &point(p.0, p.1, 0.1, p.2, p.3);
+        }
+        let s = scene(24, 24, bg, &objects);
+        let n = 1u32 << n_log;
+        let h = hw("linear12", |h| {
+            h.accumulate.filter = [FilterKind::Box, FilterKind::Tent, FilterKind::Gaussian][filter];
+            h.raster.samples = n;
+            h.accumulate.weight_bits = 2 * n_log + wb.min(16 - 2 * n_log);
+            h.accumulate.frame.format = QFormat::new(false, 12, frac);
+            h.accumulate.frame.overflow = Overflow::ALL[overflow];
+        });
+        assert_same_as_reference(&s, &h, "random scene");
+    }
+}

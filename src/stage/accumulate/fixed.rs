@@ -4,6 +4,7 @@
 
 use super::kernel::Kernel;
 use super::points::{PointFrags, point_weights};
+use super::window::{ProductStats, WindowSums};
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, SignalStats, round_shift_i64};
 use crate::stage::Region;
@@ -72,6 +73,21 @@ impl AccParams {
         }
     }
 
+    /// [`AccParams::product`] recording into a row's [`ProductStats`] (the same values).
+    #[inline]
+    fn product_row(&self, sum: i64, stats: &mut ProductStats) -> i64 {
+        let sh = self.shift();
+        if sh <= 0 {
+            let v = (sum as i128) << (-sh);
+            stats.record(v as f64, v);
+            v as i64
+        } else {
+            let r = round_shift_i64(sum, sh as u32, self.frame.quant) as i128;
+            stats.record(sum as f64 / (1u64 << sh) as f64, r);
+            r as i64
+        }
+    }
+
     /// Frame-memory add with the overflow mode.
     #[inline]
     fn add(&self, acc: i64, part: i64, overflows: &mut u64) -> Result<i64> {
@@ -118,46 +134,30 @@ impl AccParams {
 /// buffer index `window` of its filter window's first sample.
 #[inline]
 pub fn own_depth_coverage(s: &Samples, k: &Kernel, window: usize, sw: usize) -> (u32, u16) {
-    let n = k.n as usize;
     let own0 = window + k.off as usize * sw + k.off as usize;
+    match k.n {
+        1 => own_n::<1>(s, own0, sw),
+        2 => own_n::<2>(s, own0, sw),
+        4 => own_n::<4>(s, own0, sw),
+        _ => own_n::<8>(s, own0, sw),
+    }
+}
+
+/// [`own_depth_coverage`] of the `N x N` samples from buffer index `own0`.
+#[inline(always)]
+fn own_n<const N: usize>(s: &Samples, own0: usize, sw: usize) -> (u32, u16) {
     let (mut zmin, mut cov) = (u32::MAX, 0u16);
-    for j in 0..n {
-        for i in 0..n {
-            let idx = own0 + j * sw + i;
-            if s.prim[idx] != BACKGROUND {
-                cov += 1;
-                zmin = zmin.min(s.z[idx]);
-            }
+    for j in 0..N {
+        let row = own0 + j * sw;
+        let ids: &[u32; N] = s.prim[row..row + N].try_into().expect("N samples");
+        let zs: &[u32; N] = s.z[row..row + N].try_into().expect("N samples");
+        for t in 0..N {
+            let covered = ids[t] != BACKGROUND;
+            cov += u16::from(covered);
+            zmin = zmin.min(if covered { zs[t] } else { u32::MAX });
         }
     }
     (zmin, cov)
-}
-
-/// Sums `w * I` per primitive over a pixel's window starting at buffer index `base`.
-fn group_window(s: &Samples, k: &Kernel, base: usize, sw: usize, frags: &mut Vec<(u32, i64)>) {
-    let mut last = usize::MAX;
-    for j in 0..k.size {
-        let row = base + j * sw;
-        for (i, &w) in k.w[j * k.size..(j + 1) * k.size].iter().enumerate() {
-            if w == 0 {
-                continue;
-            }
-            let id = s.prim[row + i];
-            let slot = if last < frags.len() && frags[last].0 == id {
-                last
-            } else {
-                match frags.iter().position(|f| f.0 == id) {
-                    Some(x) => x,
-                    None => {
-                        frags.push((id, 0));
-                        frags.len() - 1
-                    }
-                }
-            };
-            last = slot;
-            frags[slot].1 += w as i64 * s.i[row + i] as i64;
-        }
-    }
 }
 
 struct RowOut {
@@ -208,67 +208,73 @@ pub fn accumulate_tiles(
     let k = &p.kernel;
     let size_w = k.size;
     let sw = s.reg.width();
+    let template = SignalStats::new("accumulate.product", p.frame.format);
     let rows: Vec<Result<RowOut>> = (region.y0..region.y1)
         .into_par_iter()
         .map(|py| {
+            let len = (region.x1 - region.x0) as usize;
             let mut out = RowOut {
-                acc: Vec::with_capacity((region.x1 - region.x0) as usize),
-                depth: Vec::with_capacity((region.x1 - region.x0) as usize),
-                cov: Vec::with_capacity((region.x1 - region.x0) as usize),
+                acc: Vec::with_capacity(len),
+                depth: Vec::with_capacity(len),
+                cov: Vec::with_capacity(len),
                 stats: SignalStats::new("accumulate.product", p.frame.format),
                 work: AccWork::default(),
                 tile_rmw: vec![0; tiles.map_or(0, |t| t.cols as usize)],
             };
-            let mut frags: Vec<(u32, i64)> = Vec::with_capacity(16);
-            for px in region.x0..region.x1 {
-                if let Some(t) = tiles
-                    && !t.is_touched(px, py)
-                {
-                    out.acc.push(bg);
-                    out.depth.push(u32::MAX);
-                    out.cov.push(0);
+            let mut stats = ProductStats::new();
+            let mut win = WindowSums::new(k);
+            let mut ids = Vec::new();
+            let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
+            // Spans of pixels in one tile column: binned or not (no division per pixel).
+            let spans: Vec<(u32, u32, Option<usize>, bool)> = match tiles {
+                None => vec![(region.x0, region.x1, None, true)],
+                Some(t) => {
+                    let row0 = (py / t.size * t.cols) as usize;
+                    (region.x0 / t.size..region.x1.div_ceil(t.size))
+                        .map(|tc| {
+                            let a = (tc * t.size).max(region.x0);
+                            let b = ((tc + 1) * t.size).min(region.x1);
+                            (a, b, Some(tc as usize), t.touched[row0 + tc as usize])
+                        })
+                        .collect()
+                }
+            };
+            for (xa, xb, tc, touched) in spans {
+                if !touched {
+                    let m = (xb - xa) as usize;
+                    out.acc.extend(std::iter::repeat_n(bg, m));
+                    out.depth.extend(std::iter::repeat_n(u32::MAX, m));
+                    out.cov.extend(std::iter::repeat_n(0, m));
                     continue;
                 }
-                out.work.pixels += 1;
-                frags.clear();
-                let c0 = (px as i64 * k.n as i64 - k.off - s.reg.c0) as usize;
-                let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
-                // Fast path: one scan sums w*I and checks whether a single primitive
-                // fills the window (most pixels); otherwise group by primitive.
-                let first = s.prim[r0 * sw + c0];
-                let (mut total, mut uniform) = (0i64, true);
-                for j in 0..size_w {
-                    let row = (r0 + j) * sw + c0;
-                    let wrow = &k.w[j * size_w..(j + 1) * size_w];
-                    let ids = &s.prim[row..row + size_w];
-                    let is = &s.i[row..row + size_w];
-                    for ((&w, &id), &iv) in wrow.iter().zip(ids).zip(is) {
-                        total += w as i64 * iv as i64;
-                        uniform &= id == first;
+                let c0 = |px: u32| (px as i64 * k.n as i64 - k.off - s.reg.c0) as usize;
+                let pixels = (xb - xa) as usize;
+                win.block_ids(&s.prim, k, r0 * sw + c0(xa), sw, pixels, &mut ids);
+                let cols = pixels + k.size / k.n as usize - 1;
+                for px in xa..xb {
+                    out.work.pixels += 1;
+                    let base = r0 * sw + c0(px);
+                    let g = (px - xa) as usize;
+                    win.sum(&s.prim, &s.i, k, base, sw, &ids, g, cols);
+                    out.work.macs += (size_w * size_w) as u64;
+                    let mut acc = 0i64;
+                    for &(_, sum) in &win.frags {
+                        let part = p.product_row(sum, &mut stats);
+                        acc = p.add(acc, part, &mut out.work.overflows)?;
                     }
+                    let nf = win.frags.len() as u64;
+                    out.work.fragments += nf;
+                    if let Some(c) = tc {
+                        out.tile_rmw[c] += nf;
+                    }
+                    // Depth and coverage of the pixel's own samples.
+                    let (zmin, cov) = own_depth_coverage(s, k, base, sw);
+                    out.acc.push(acc as u32);
+                    out.depth.push(zmin);
+                    out.cov.push(cov);
                 }
-                if uniform {
-                    frags.push((first, total));
-                } else {
-                    group_window(s, k, r0 * sw + c0, sw, &mut frags);
-                }
-                out.work.macs += (size_w * size_w) as u64;
-                frags.sort_unstable_by_key(|f| f.0);
-                let mut acc = 0i64;
-                for &(_, sum) in &frags {
-                    let part = p.product(sum, &mut out.stats);
-                    acc = p.add(acc, part, &mut out.work.overflows)?;
-                }
-                out.work.fragments += frags.len() as u64;
-                if let Some(t) = tiles {
-                    out.tile_rmw[(px / t.size) as usize] += frags.len() as u64;
-                }
-                // Depth and coverage of the pixel's own samples.
-                let (zmin, cov) = own_depth_coverage(s, k, r0 * sw + c0, sw);
-                out.acc.push(acc as u32);
-                out.depth.push(zmin);
-                out.cov.push(cov);
             }
+            out.stats = stats.into_stats(&template);
             Ok(out)
         })
         .collect();

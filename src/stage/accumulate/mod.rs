@@ -17,7 +17,8 @@
 //!
 //! Files: `kernel` (the quantised [`Kernel`]), `fixed` (the fixed model into the frame
 //! memory), `points` (light points and the sample region), `float` (the float reference),
-//! `cost` (the stage's hardware cost), `stage` (the stage contract).
+//! `cost` (the stage's hardware cost), `stage` (the stage contract), `window` (the
+//! per-pixel window sums of the fixed model).
 
 mod cost;
 mod fixed;
@@ -25,6 +26,7 @@ mod float;
 mod kernel;
 mod points;
 mod stage;
+mod window;
 
 pub use cost::{FRAME_MEMORY, WEIGHT_ROM, cost};
 pub use fixed::{AccParams, AccWork, Frame, accumulate, accumulate_tiles, own_depth_coverage};
