@@ -227,7 +227,9 @@ fn clock(sims: &mut [Sim], states: &mut [State]) {
 
 /// Runs the cycle-counting simulation, jumping over quiet cycles (module doc); `trace`
 /// receives the stepped clocks' stage states and FIFO occupancies (for the VCD writer).
-/// The counts are those of one clock at a time ([`super::stepwise::simulate_stepwise`]).
+/// The counts are those of one clock at a time ([`super::stepwise::simulate_stepwise`]). A
+/// workload that can never finish (a stage waiting for tokens its feeder never sends) ends
+/// at the first cycle from which nothing can change, instead of looping for ever.
 pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
     let mut port_bound = 0;
     let mut sims: Vec<Sim> = (0..w.stages.len())
@@ -267,15 +269,17 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
         }
         t += 1;
         let quiet = (0..ns).map(|i| sims[i].quiet(states[i])).min().unwrap_or(0);
-        // u64::MAX: every stage waits for another (no workload the config accepts does
-        // that); step clock by clock as the reference does.
-        if quiet > 0 && quiet < u64::MAX {
-            for i in 0..ns {
-                counts[i][states[i] as usize] += quiet;
-                sims[i].skip(states[i], quiet);
-            }
-            t += quiet;
+        if quiet == u64::MAX {
+            // Every stage waits for another for ever: a chain whose stages pass different
+            // numbers of tokens (no run produces one; the stepwise reference would loop
+            // for ever). The frame ends here.
+            break;
         }
+        for i in 0..ns {
+            counts[i][states[i] as usize] += quiet;
+            sims[i].skip(states[i], quiet);
+        }
+        t += quiet;
     }
     let tokens: Vec<u64> = sims.iter().map(|s| s.service.len() as u64).collect();
     assemble(w, &tokens, &counts, &fifo_max, t, port_bound)
