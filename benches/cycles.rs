@@ -13,9 +13,15 @@ use igemu::stage::RunOptions;
 use std::hint::black_box;
 use std::time::Instant;
 
-fn with_vcd(w: &Workload, sim: fn(&Workload, Option<&mut cycles::Trace>) -> cycles::SimResult) -> usize {
+fn with_vcd(
+    w: &Workload,
+    sim: fn(&Workload, Option<&mut cycles::Trace>) -> cycles::SimResult,
+) -> usize {
     let mut vcd = VcdWriter::new(Vec::new(), w, 100.0).expect("in memory");
-    let r = sim(w, Some(&mut |t, st: &[State], occ: &[u32]| vcd.cycle(t, st, occ)));
+    let r = sim(
+        w,
+        Some(&mut |t, st: &[State], occ: &[u32]| vcd.cycle(t, st, occ)),
+    );
     vcd.finish(r.total_cycles).expect("in memory").len()
 }
 

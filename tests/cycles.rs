@@ -16,8 +16,8 @@ use igemu::files::TomlFile;
 use igemu::pipeline::{self, Render, render};
 use igemu::scene::{Lens, Scene};
 use igemu::stage::RunOptions;
-use igemu::stage::{StageId, TokenKind, Tokens};
 use igemu::stage::accumulate::{self, AccParams};
+use igemu::stage::{StageId, TokenKind, Tokens};
 use proptest::prelude::*;
 
 fn run(s: &Scene, h: &HwConfig) -> Render {
@@ -589,10 +589,10 @@ fn random_workload(rng: &mut Rng) -> Workload {
     let mut kind = kinds[0];
     let mut n = 0;
     for id in igemu::config::TIMED {
-        if rng.next_u64() % 5 == 0 {
+        if rng.next_u64().is_multiple_of(5) {
             continue;
         }
-        if rng.next_u64() % 3 == 0 {
+        if rng.next_u64().is_multiple_of(3) {
             kind = kinds[(rng.next_u64() % 4) as usize];
         }
         // The stages of a chain pass the same tokens (a real run's do).
@@ -603,11 +603,11 @@ fn random_workload(rng: &mut Rng) -> Workload {
                 _ => (rng.next_u64() % 40) as usize,
             };
         }
-        let big = rng.next_u64() % 2 == 0;
+        let big = rng.next_u64().is_multiple_of(2);
         let items = (0..n)
             .map(|_| rng.next_u64() % if big { 400 } else { 4 })
             .collect();
-        let port_bits = if rng.next_u64() % 3 == 0 {
+        let port_bits = if rng.next_u64().is_multiple_of(3) {
             (0..n).map(|_| rng.next_u64() % 200).collect()
         } else {
             Vec::new()
@@ -624,10 +624,10 @@ fn random_workload(rng: &mut Rng) -> Workload {
     }
     let mut c = random_timing(rng);
     all_timings(&mut c, |t| {
-        if rng.next_u64() % 4 == 0 {
+        if rng.next_u64().is_multiple_of(4) {
             t.fifo = [1, 2, 65536][(rng.next_u64() % 3) as usize];
         }
-        if rng.next_u64() % 4 == 0 {
+        if rng.next_u64().is_multiple_of(4) {
             t.latency = [0, 1, 1024][(rng.next_u64() % 3) as usize];
         }
     });
