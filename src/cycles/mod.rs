@@ -14,7 +14,9 @@
 //! * with a thin lens, accumulate writes the frame memory (a sink), `dof` runs on the
 //!   finished frame (one token per depth layer) and `gamma` then reads it row by row.
 //!
-//! A stage serves one token at a time for `max(1, ceil(items / lanes)) * ii` cycles ([`sim`]).
+//! A stage serves one token at a time for `max(1, ceil(items / lanes)) * ii` cycles ([`sim`],
+//! which jumps over the cycles in which nothing changes; [`stepwise`] is its one-clock-at-a-
+//! time reference).
 //! The accumulate stage's frame memory is a port of `frame_port_bits` per clock; each
 //! read-modify-write moves `2 x` the frame word, so a tile takes at least
 //! `ceil(rmw * 2 * frame_bits / port_bits)` cycles.
@@ -27,10 +29,12 @@
 //! real span walker is not modelled.
 
 pub mod sim;
+pub mod stepwise;
 pub mod vcd;
 pub mod workload;
 
 pub use sim::{SimResult, StageCycles, State, Trace, simulate};
+pub use stepwise::simulate_stepwise;
 pub use workload::{ChainStage, ScreenFacts, Workload};
 
 use crate::cost::CostSummary;

@@ -9,6 +9,20 @@
 //! next stage in the same cycle; a FIFO slot freed in cycle `t` is seen upstream in cycle
 //! `t + 1`. A single token through a chain therefore takes exactly `sum(service + latency)`
 //! cycles. A chain head (no feeder) starts when every stage before it has finished.
+//!
+//! # Jumping over quiet cycles
+//! [`simulate`] steps one clock exactly as the stepwise reference
+//! ([`super::stepwise::simulate_stepwise`]) does, then jumps over the following cycles in
+//! which no stage can change state or touch a FIFO. After a clock, each stage stays as it is
+//! for a number of cycles it knows from its own counters alone, as long as no other stage
+//! acts: a busy stage until its token's last service cycle (`remaining - 1` cycles), a
+//! starved or idle one until its pipeline's head reaches the output, a stalled one for ever
+//! (until the next stage takes a token). The other stages can only end that by an action of
+//! their own (entering a FIFO, taking from one, finishing), which their own count bounds, so
+//! the smallest count over the stages is a run of cycles in which every state and FIFO
+//! occupancy repeats: the counts grow in bulk, service counters and pipeline countdowns
+//! shrink in bulk, and the next clock is stepped again. The trace receives only the stepped
+//! clocks; the skipped ones repeat the last values, so a value-change dump is the same text.
 
 use super::workload::Workload;
 use serde::Serialize;
@@ -96,25 +110,126 @@ impl SimResult {
 struct Sim {
     service: Vec<u64>,
     next: usize,
+    /// Service cycles of the current token still to come.
     remaining: u64,
+    /// Countdowns of the tokens in the stage's pipeline (front: the oldest).
     pipe: VecDeque<u32>,
     latency: u32,
     /// FIFO to the next stage: occupancy and depth (`None` for a sink).
     occ: u32,
     depth: Option<u32>,
+    feeder: Option<usize>,
 }
 
 impl Sim {
     fn done(&self) -> bool {
         self.next == self.service.len() && self.remaining == 0 && self.pipe.is_empty()
     }
+
+    /// After a clock in which the stage was in `state`: the cycles that follow in which it
+    /// stays in `state` and touches no FIFO, as long as no other stage acts.
+    fn quiet(&self, state: State) -> u64 {
+        match state {
+            // Frozen until the next stage takes a token (its own action).
+            State::Stalled => match self.depth {
+                Some(d) if self.occ >= d => u64::MAX,
+                _ => 0,
+            },
+            _ => {
+                // The pipeline's head leaves (or stalls) in the cycle after it reaches 0.
+                let head = self.pipe.front().map_or(u64::MAX, |&c| c as u64);
+                if state == State::Busy {
+                    // The last service cycle puts the token into the pipeline.
+                    head.min(self.remaining.saturating_sub(1))
+                } else {
+                    // Starved: the feeder's FIFO (or the earlier stages) change only by an
+                    // action of their own. Idle: only the pipeline drains.
+                    head
+                }
+            }
+        }
+    }
+
+    /// Advances `n` quiet cycles (`n <= self.quiet(state)`).
+    fn skip(&mut self, state: State, n: u64) {
+        if state == State::Stalled {
+            return;
+        }
+        if state == State::Busy {
+            self.remaining -= n;
+        }
+        // n <= the head's countdown <= every countdown, and n fits the countdowns.
+        let n = n as u32;
+        for c in self.pipe.iter_mut() {
+            *c -= n;
+        }
+    }
 }
 
-/// Receives every cycle: the cycle, each stage's state and each stage's FIFO occupancy.
+/// Receives the clocks the simulator steps, in order: the cycle, each stage's state and
+/// each stage's FIFO occupancy. A cycle not passed repeats the values of the one before
+/// (the simulator jumped over it); every change of a value is passed.
 pub type Trace<'a> = dyn FnMut(u64, &[State], &[u32]) + 'a;
 
-/// Runs the cycle-counting simulation; `trace` receives every cycle's stage states and
-/// FIFO occupancies (for the VCD writer).
+/// One clock of every stage, upstream first (the semantics of the module doc).
+fn clock(sims: &mut [Sim], states: &mut [State]) {
+    for i in 0..sims.len() {
+        // Leave the pipeline into the FIFO (or the sink).
+        let s = &mut sims[i];
+        if s.pipe.front() == Some(&0) {
+            match s.depth {
+                Some(d) if s.occ >= d => {
+                    states[i] = State::Stalled;
+                    continue;
+                }
+                Some(_) => {
+                    s.occ += 1;
+                    s.pipe.pop_front();
+                }
+                None => {
+                    s.pipe.pop_front();
+                }
+            }
+        }
+        for r in s.pipe.iter_mut() {
+            *r = r.saturating_sub(1);
+        }
+        let state = if s.remaining > 0 {
+            s.remaining -= 1;
+            State::Busy
+        } else if s.next < s.service.len() {
+            let available = match s.feeder {
+                Some(f) => sims[f].occ > 0,
+                // A chain head starts when every stage before it has finished.
+                None => sims[..i].iter().all(Sim::done),
+            };
+            if available {
+                let s = &mut sims[i];
+                s.remaining = s.service[s.next] - 1;
+                s.next += 1;
+                if let Some(f) = s.feeder {
+                    sims[f].occ -= 1;
+                }
+                State::Busy
+            } else {
+                State::Starved
+            }
+        } else {
+            State::Idle
+        };
+        let s = &mut sims[i];
+        if state == State::Busy && s.remaining == 0 {
+            s.pipe.push_back(s.latency);
+        }
+        states[i] = state;
+    }
+}
+
+/// Runs the cycle-counting simulation, jumping over quiet cycles (module doc); `trace`
+/// receives the stepped clocks' stage states and FIFO occupancies (for the VCD writer).
+/// The counts are those of one clock at a time ([`super::stepwise::simulate_stepwise`]). A
+/// workload that can never finish (a stage waiting for tokens its feeder never sends) ends
+/// at the first cycle from which nothing can change, instead of looping for ever.
 pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
     let mut port_bound = 0;
     let mut sims: Vec<Sim> = (0..w.stages.len())
@@ -129,67 +244,18 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
                 latency: w.stages[i].timing.latency,
                 occ: 0,
                 depth: w.stages[i].fifo,
+                feeder: w.stages[i].feeder,
             }
         })
         .collect();
     let ns = sims.len();
-    let feeder: Vec<Option<usize>> = w.stages.iter().map(|s| s.feeder).collect();
     let mut counts = vec![[0u64; 4]; ns];
     let mut fifo_max = vec![0u32; ns];
     let mut states = vec![State::Idle; ns];
     let mut occ = vec![0u32; ns];
     let mut t = 0u64;
     loop {
-        for i in 0..ns {
-            // Leave the pipeline into the FIFO (or the sink).
-            let s = &sims[i];
-            if s.pipe.front() == Some(&0) {
-                match s.depth {
-                    Some(d) if s.occ >= d => {
-                        states[i] = State::Stalled;
-                        continue;
-                    }
-                    Some(_) => {
-                        sims[i].occ += 1;
-                        sims[i].pipe.pop_front();
-                    }
-                    None => {
-                        sims[i].pipe.pop_front();
-                    }
-                }
-            }
-            for r in sims[i].pipe.iter_mut() {
-                *r = r.saturating_sub(1);
-            }
-            let available = match feeder[i] {
-                Some(f) => sims[f].occ > 0,
-                // A chain head starts when every stage before it has finished.
-                None => sims[..i].iter().all(Sim::done),
-            };
-            let s = &mut sims[i];
-            let state = if s.remaining > 0 {
-                s.remaining -= 1;
-                State::Busy
-            } else if s.next < s.service.len() {
-                if available {
-                    s.remaining = s.service[s.next] - 1;
-                    s.next += 1;
-                    if let Some(f) = feeder[i] {
-                        sims[f].occ -= 1;
-                    }
-                    State::Busy
-                } else {
-                    State::Starved
-                }
-            } else {
-                State::Idle
-            };
-            let s = &mut sims[i];
-            if state == State::Busy && s.remaining == 0 {
-                s.pipe.push_back(s.latency);
-            }
-            states[i] = state;
-        }
+        clock(&mut sims, &mut states);
         if sims.iter().all(Sim::done) {
             break;
         }
@@ -202,7 +268,32 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
             f(t, &states, &occ);
         }
         t += 1;
+        let quiet = (0..ns).map(|i| sims[i].quiet(states[i])).min().unwrap_or(0);
+        if quiet == u64::MAX {
+            // Every stage waits for another for ever: a chain whose stages pass different
+            // numbers of tokens (no run produces one; the stepwise reference would loop
+            // for ever). The frame ends here.
+            break;
+        }
+        for i in 0..ns {
+            counts[i][states[i] as usize] += quiet;
+            sims[i].skip(states[i], quiet);
+        }
+        t += quiet;
     }
+    let tokens: Vec<u64> = sims.iter().map(|s| s.service.len() as u64).collect();
+    assemble(w, &tokens, &counts, &fifo_max, t, port_bound)
+}
+
+/// The result of a simulation of `w`: tokens, per-state counts and FIFO maxima per stage.
+pub(super) fn assemble(
+    w: &Workload,
+    tokens: &[u64],
+    counts: &[[u64; 4]],
+    fifo_max: &[u32],
+    total_cycles: u64,
+    frame_port_bound_cycles: u64,
+) -> SimResult {
     let stages = w
         .stages
         .iter()
@@ -214,7 +305,7 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
             latency: s.timing.latency,
             ii: s.timing.ii,
             fifo: s.fifo.unwrap_or(0),
-            tokens: sims[i].service.len() as u64,
+            tokens: tokens[i],
             items: s.items.iter().sum(),
             busy: counts[i][State::Busy as usize],
             stalled: counts[i][State::Stalled as usize],
@@ -224,8 +315,8 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
         })
         .collect();
     SimResult {
-        total_cycles: t,
+        total_cycles,
         stages,
-        frame_port_bound_cycles: port_bound,
+        frame_port_bound_cycles,
     }
 }
