@@ -2,7 +2,7 @@
 //! and each layer's bounding box and work for the cycle model.
 
 use super::lens::{LensMap, SIGMA_FRAC};
-use super::mask::{half_size, mask_difference, taps_f64, taps_fixed};
+use super::mask::{MaskDifferences, half_size, taps_f64, taps_fixed};
 use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
 use serde::Serialize;
 
@@ -72,6 +72,9 @@ pub struct LayerPlan {
     pub index: Vec<u16>,
     /// Index of the layer holding the background (uncovered shares), if any.
     pub background: Option<usize>,
+    /// Per layer, the box pixels in uniform tiles the hardware skips
+    /// (`dof.skip_uniform_tiles`; set by the fixed run, empty otherwise).
+    pub skipped: Vec<u64>,
 }
 
 /// Grows the layers far to near (see the module notes). Errors name the limit exceeded.
@@ -126,6 +129,8 @@ pub fn plan_layers(
         };
         (zm, sig(c))
     };
+    let mut diffs = MaskDifferences::default();
+    let mut mask_difference = |a: f64, b: f64, k: f64| diffs.get(a, b, k);
     let mut layers: Vec<Layer> = Vec::new();
     let mut i = 0;
     while i < keys.len() {
@@ -189,6 +194,7 @@ pub fn plan_layers(
         layers,
         index,
         background,
+        skipped: Vec::new(),
     })
 }
 
@@ -200,6 +206,8 @@ pub struct LayerWork {
     pub pixels: u64,
     /// Mask taps `2M + 1` (1: passed through).
     pub taps: u32,
+    /// Pixels of the box in skipped uniform tiles (`dof.skip_uniform_tiles`; else 0).
+    pub skipped: u64,
 }
 
 /// The layers [`layered_fixed`](super::layered_fixed) processes, in its order, with their boxes.
@@ -213,6 +221,7 @@ pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWor
             Some(LayerWork {
                 pixels: ((x1 - x0) * (y1 - y0)) as u64,
                 taps: 2 * layer.m as u32 + 1,
+                skipped: plan.skipped.get(l).copied().unwrap_or(0),
             })
         })
         .collect()
