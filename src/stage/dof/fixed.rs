@@ -2,7 +2,7 @@
 //! tap passes ([`row_mac`], the HDL model's reference), the layer colour and alpha, and the
 //! back-to-front composite; work and overflow counts in [`DofWork`].
 
-use super::layers::{DepthImage, LayerPlan, layer_box};
+use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::{fast, uniform};
 use crate::config::DofCfg;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
@@ -253,9 +253,9 @@ pub fn layered_fixed_exec(
     let mut def = vec![false; w * h];
     let one_q = 1u128 << q;
     let n2 = img.n2 as u128;
+    let boxes = layer_boxes(w, h, plan);
     for (l, layer) in plan.layers.iter().enumerate() {
-        let all = plan.background == Some(l);
-        let Some((x0, y0, x1, y1)) = layer_box(w, h, &plan.index, l, layer.m, all) else {
+        let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
         };
         let (bw, bh) = (x1 - x0, y1 - y0);

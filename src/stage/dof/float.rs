@@ -2,7 +2,7 @@
 
 use super::fixed::Exec;
 use super::fixed::{border_sums, share};
-use super::layers::{DepthImage, LayerPlan, layer_box};
+use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::uniform;
 
 /// The float taps on the fixed mask's support (taps that quantise to 0 are 0), renormalised
@@ -53,9 +53,9 @@ pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> 
     let (w, h) = (img.width, img.height);
     let mut out = vec![0.0f64; w * h];
     let mut def = vec![false; w * h];
+    let boxes = layer_boxes(w, h, plan);
     for (l, layer) in plan.layers.iter().enumerate() {
-        let all = plan.background == Some(l);
-        let Some((x0, y0, x1, y1)) = layer_box(w, h, &plan.index, l, layer.m, all) else {
+        let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
         };
         let (bw, bh) = (x1 - x0, y1 - y0);

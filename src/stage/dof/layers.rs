@@ -85,8 +85,9 @@ pub fn plan_layers(
     lens: &LensMap,
     p: &DofCfg,
 ) -> Result<LayerPlan, String> {
-    let mut keys: Vec<u32> = key.to_vec();
-    if cov.iter().any(|&c| (c as u32) < n2) {
+    // The background code (most pixels of a typical frame) is added once, not sorted.
+    let mut keys: Vec<u32> = key.iter().copied().filter(|&k| k != u32::MAX).collect();
+    if key.contains(&u32::MAX) || cov.iter().any(|&c| (c as u32) < n2) {
         keys.push(u32::MAX);
     }
     keys.sort_unstable_by(|a, b| b.cmp(a));
@@ -223,6 +224,46 @@ pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWor
                 taps: 2 * layer.m as u32 + 1,
                 skipped: plan.skipped.get(l).copied().unwrap_or(0),
             })
+        })
+        .collect()
+}
+
+/// [`layer_box`] of every layer of `plan` in one pass over the index image.
+pub(super) fn layer_boxes(
+    w: usize,
+    h: usize,
+    plan: &LayerPlan,
+) -> Vec<Option<(usize, usize, usize, usize)>> {
+    let n = plan.layers.len();
+    let mut b = vec![(usize::MAX, usize::MAX, 0usize, 0usize); n];
+    for y in 0..h {
+        for (x, &l) in plan.index[y * w..(y + 1) * w].iter().enumerate() {
+            let Some(e) = b.get_mut(l as usize) else {
+                continue;
+            };
+            e.0 = e.0.min(x);
+            e.1 = e.1.min(y);
+            e.2 = e.2.max(x + 1);
+            e.3 = e.3.max(y + 1);
+        }
+    }
+    b.into_iter()
+        .zip(&plan.layers)
+        .enumerate()
+        .map(|(l, ((x0, y0, x1, y1), layer))| {
+            if plan.background == Some(l) {
+                Some((0, 0, w, h))
+            } else if x0 == usize::MAX {
+                None
+            } else {
+                let m = layer.m;
+                Some((
+                    x0.saturating_sub(m),
+                    y0.saturating_sub(m),
+                    (x1 + m).min(w),
+                    (y1 + m).min(h),
+                ))
+            }
         })
         .collect()
 }
