@@ -233,6 +233,9 @@ pub fn layered_fixed_observed(
     layered_fixed_exec(img, plan, p, frame_fmt, Exec::SkipUniform, observe).map(|r| (r.0, r.1))
 }
 
+/// The output codes, the work counts and per layer the pixels of skipped uniform tiles.
+pub type FixedRun = (Vec<u32>, DofWork, Vec<u64>);
+
 /// [`layered_fixed_observed`] computed as `exec` says. Also returns per layer the box pixels
 /// in skipped uniform tiles (all 0 unless `dof.skip_uniform_tiles`; the same for any `exec`).
 pub fn layered_fixed_exec(
@@ -242,7 +245,7 @@ pub fn layered_fixed_exec(
     frame_fmt: QFormat,
     exec: Exec,
     mut observe: impl FnMut(&LayerPlanes),
-) -> Result<(Vec<u32>, DofWork, Vec<u64>), (String, u32)> {
+) -> Result<FixedRun, (String, u32)> {
     let (w, h) = (img.width, img.height);
     let (q, g) = (p.alpha_bits, p.guard_bits);
     let line_max: u128 = (1u128 << p.line_bits) - 1;

@@ -139,6 +139,7 @@ fn fast_passes(
     let (mut hx, mut ha) = (vec![0.0; bw * bh], vec![0.0; bw * bh]);
     let mut last = (u64::MAX, 0.0f64); // (value bits, interior row sum)
     for y in 0..bh {
+        #[allow(clippy::needless_range_loop)] // x is the position, not only an index
         for x in 0..bw {
             let i = y * bw + x;
             let r = tap_range(c, x, bw);
@@ -191,8 +192,8 @@ fn fast_passes(
             while x < bw && !(interior && ur[x]) {
                 x += 1;
             }
-            for t in r.0..r.1 {
-                let (cv, src) = (c[t], (y + t - m) * bw);
+            for (t, &cv) in c.iter().enumerate().take(r.1).skip(r.0) {
+                let src = (y + t - m) * bw;
                 for k in xa..x {
                     ox[k] += cv * hx[src + k];
                     oa[k] += cv * ha[src + k];
