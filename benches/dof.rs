@@ -7,7 +7,8 @@ use igemu::config::HwConfig;
 use igemu::pipeline;
 use igemu::scene::Scene;
 use igemu::stage::dof::{
-    DepthImage, LensMap, layered_f64, layered_fixed, per_pixel_scatter, plan_layers,
+    DepthImage, Exec, LensMap, layered_f64, layered_fixed, layered_fixed_exec, per_pixel_scatter,
+    plan_layers,
 };
 use igemu::stage::{RunOptions, StageId};
 use std::hint::black_box;
@@ -72,6 +73,12 @@ fn bench(c: &mut Criterion) {
     let tf = best(&|| {
         black_box(layered_fixed(&img, &plan, &hw.dof, fmt).unwrap());
     });
+    let tfull = best(&|| {
+        black_box(layered_fixed_exec(&img, &plan, &hw.dof, fmt, Exec::Full, |_| {}).unwrap());
+    });
+    let tplan = best(&|| {
+        black_box(plan_layers(&fr.depth, &fr.coverage, 16, &lens, &hw.dof).unwrap());
+    });
     let tl = best(&|| {
         black_box(layered_f64(&fimg, &plan));
     });
@@ -87,6 +94,13 @@ fn bench(c: &mut Criterion) {
         tf * 1e3,
         tl * 1e3,
         tp * 1e3
+    );
+    eprintln!(
+        "dof uniform-window skip: every tap / skip (fixed layered) = {:.2}; per-pixel / (layer plan + fixed layered) = {:.2} (ms: every tap {:.1}, plan {:.1})",
+        tfull / tf,
+        tp / (tplan + tf),
+        tfull * 1e3,
+        tplan * 1e3
     );
 }
 

@@ -75,6 +75,7 @@ pub fn preset(name: &str) -> Option<HwConfig> {
             max_half_size: 32,
             quant: Quant::RndConv,
             overflow: Overflow::Sat,
+            skip_uniform_tiles: false,
             luminance: LuminanceCfg::default(),
             downsample: DownsampleCfg::default(),
         },

@@ -114,7 +114,7 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         ("dither", "seed") => s("an integer in 0..=18446744073709551615"),
         ("dither", "frame") => s("an integer in 0..=4294967295 (the frame number)"),
         ("dof", "") => table(
-            "kind, sigma, sigma_rom_bits, p, k, coef_bits, alpha_bits, guard_bits, line_bits, acc_bits, max_half_size, quant, overflow, and the tables [dof.luminance], [dof.downsample]",
+            "kind, sigma, sigma_rom_bits, p, k, coef_bits, alpha_bits, guard_bits, line_bits, acc_bits, max_half_size, quant, overflow, skip_uniform_tiles, and the tables [dof.luminance], [dof.downsample]",
         ),
         ("dof", "kind") => format!("one of {}", names(DofKind::ALL.iter().map(|k| k.name()))),
         ("dof", "sigma") => s("one of \"paper\", \"affine\""),
@@ -133,6 +133,9 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         ("dof", "k") => s("a finite number in (0, 1) (the mask's edge/centre ratio)"),
         ("dof", "max_half_size") => {
             format!("an integer in 1..={MAX_HALF_SIZE_LIMIT} (pixels)")
+        }
+        ("dof", "skip_uniform_tiles") => {
+            s("true or false (a chip that skips 16x16 tiles of uniform mask windows)")
         }
         ("dof", "overflow") | ("coding", "overflow") => s("one of \"SAT\", \"ERROR\""),
         ("dof", f) if DOF_BITS.iter().any(|(n, _, _)| *n == f) => {

@@ -110,6 +110,12 @@ pub struct DofCfg {
     pub quant: Quant,
     /// Overflow of the line buffer and accumulator (SAT or ERROR).
     pub overflow: Overflow,
+    /// The layered datapath detects 16x16 output tiles whose every pixel's mask window is
+    /// uniform (same code, same layer, full coverage) and writes their value without the tap
+    /// passes (docs/dof.md, "Uniform tiles"): a detection pre-scan per layer, fewer MACs and
+    /// pass outputs. The outputs are the same either way; the emulator skips uniform windows
+    /// regardless, this models a chip that does too.
+    pub skip_uniform_tiles: bool,
     /// `[dof.luminance]`: the luminance-aware method.
     pub luminance: LuminanceCfg,
     /// `[dof.downsample]`: the downsample-and-blend method.
@@ -204,6 +210,7 @@ pub(crate) struct RawDof {
     max_half_size: Option<u32>,
     quant: Option<Quant>,
     overflow: Option<Overflow>,
+    skip_uniform_tiles: Option<bool>,
     luminance: Option<RawLuminance>,
     downsample: Option<RawDownsample>,
 }
@@ -224,6 +231,7 @@ impl RawDof {
         set(&mut c.max_half_size, self.max_half_size);
         set(&mut c.quant, self.quant);
         set(&mut c.overflow, self.overflow);
+        set(&mut c.skip_uniform_tiles, self.skip_uniform_tiles);
         if let Some(l) = self.luminance {
             l.apply(&mut c.luminance);
         }

@@ -120,6 +120,50 @@ pub fn cost(
         ],
     )
     .merge(lens_cost(lens))
+    .merge(if p.skip_uniform_tiles {
+        uniform_cost(m_max, width, height, code_bits, a_bits, p)
+    } else {
+        Cost::new(vec![], vec![], vec![])
+    })
+}
+
+/// Name of the uniform-run line buffer (`dof.skip_uniform_tiles`).
+pub const UNIFORM_RUNS: &str = "dof uniform-run line buffer";
+/// Name of the uniform tile flags (`dof.skip_uniform_tiles`).
+pub const UNIFORM_FLAGS: &str = "dof uniform tile flags";
+
+/// The uniform-tile detection (`dof.skip_uniform_tiles`, docs/dof.md): per pixel a compare
+/// of code and layer share with the left and upper neighbours, a horizontal run counter and
+/// a per-column vertical run counter (a line of `width` counters up to `2M + 1`), the tile
+/// flags of two layers (one being scanned, one being blurred), and the multiplier that
+/// writes a uniform line word `x W_x` without taps.
+fn uniform_cost(
+    m_max: u64,
+    width: u64,
+    height: u64,
+    code_bits: u32,
+    a_bits: u32,
+    p: &DofCfg,
+) -> Cost {
+    let run_bits = 64 - (2 * m_max + 1).leading_zeros();
+    let t = super::UNIFORM_TILE as u64;
+    let tiles = width.div_ceil(t) * height.div_ceil(t);
+    Cost::new(
+        vec![
+            Memory::ram(UNIFORM_RUNS, width, run_bits + code_bits),
+            Memory::ram(UNIFORM_FLAGS, 2 * tiles, 1),
+        ],
+        vec![
+            Unit::adder("uniform compare (code, share)", 2, code_bits + a_bits),
+            Unit::adder("uniform run counters", 2, run_bits),
+        ],
+        vec![Unit::mul(
+            "uniform line word x * W_x",
+            1,
+            code_bits + a_bits,
+            p.coef_bits + 1,
+        )],
+    )
 }
 
 /// The coefficient ROM's contents: per layer (far to near) the centre tap and the taps on

@@ -2,7 +2,8 @@
 //! tap passes ([`row_mac`], the HDL model's reference), the layer colour and alpha, and the
 //! back-to-front composite; work and overflow counts in [`DofWork`].
 
-use super::layers::{DepthImage, LayerPlan, layer_box};
+use super::layers::{DepthImage, LayerPlan, layer_boxes};
+use super::{fast, uniform};
 use crate::config::DofCfg;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
 use serde::Serialize;
@@ -24,6 +25,8 @@ pub struct DofWork {
     pub acc_overflows: u64,
     /// Output pixels saturated to the frame format (signal `dof.out`).
     pub out_overflows: u64,
+    /// Uniform 16x16 tiles skipped (`dof.skip_uniform_tiles`; else 0).
+    pub skipped_tiles: u64,
 }
 
 /// In-image tap sums along one axis of length `n` for taps `c`.
@@ -109,6 +112,78 @@ pub struct LayerPlanes<'a> {
     pub ha: &'a [u128],
 }
 
+/// One output row's exact vertical sums over the columns whose window is not uniform.
+struct RowSums {
+    narrow: (Vec<u64>, Vec<u64>),
+    wide: (Vec<u128>, Vec<u128>),
+    is_wide: bool,
+}
+
+impl RowSums {
+    fn new(bw: usize, is_wide: bool) -> Self {
+        let n = |k: bool| if k { bw } else { 0 };
+        Self {
+            narrow: (vec![0; n(!is_wide)], vec![0; n(!is_wide)]),
+            wide: (vec![0; n(is_wide)], vec![0; n(is_wide)]),
+            is_wide,
+        }
+    }
+
+    /// The sums of row `y` at every run of columns with `uniform` false.
+    fn fill(
+        &mut self,
+        c: &[u64],
+        hx: &[u128],
+        ha: &[u128],
+        dim: (usize, usize),
+        y: usize,
+        uniform: &[bool],
+    ) {
+        let mut x = 0;
+        while x < uniform.len() {
+            if uniform[x] {
+                x += 1;
+                continue;
+            }
+            let xa = x;
+            while x < uniform.len() && !uniform[x] {
+                x += 1;
+            }
+            if self.is_wide {
+                fast::vsum_row(
+                    c,
+                    hx,
+                    ha,
+                    dim,
+                    y,
+                    (xa, x),
+                    &mut self.wide.0,
+                    &mut self.wide.1,
+                );
+            } else {
+                fast::vsum_row(
+                    c,
+                    hx,
+                    ha,
+                    dim,
+                    y,
+                    (xa, x),
+                    &mut self.narrow.0,
+                    &mut self.narrow.1,
+                );
+            }
+        }
+    }
+
+    fn get(&self, x: usize) -> (u128, u128) {
+        if self.is_wide {
+            (self.wide.0[x], self.wide.1[x])
+        } else {
+            (self.narrow.0[x] as u128, self.narrow.1[x] as u128)
+        }
+    }
+}
+
 /// The pixel's share in a layer (in `1/n2` units).
 #[inline]
 pub(super) fn share(plan: &LayerPlan, img_key: u32, cov: u16, idx: u16, l: usize, n2: u32) -> u32 {
@@ -122,6 +197,16 @@ pub(super) fn share(plan: &LayerPlan, img_key: u32, cov: u16, idx: u16, l: usize
         m += n2 - own.min(n2);
     }
     m
+}
+
+/// How the emulator computes a layer's passes; the outputs and work counts are the same.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Exec {
+    /// Every tap of both passes at every box pixel (the straightforward reference).
+    Full,
+    /// Uniform mask windows take their value without MACs, the vertical pass runs row by
+    /// row ([`super::fast`]): the default.
+    SkipUniform,
 }
 
 /// The fixed-point layered DoF. Returns the output codes in `frame_fmt` (rounded with
@@ -143,20 +228,37 @@ pub fn layered_fixed_observed(
     plan: &LayerPlan,
     p: &DofCfg,
     frame_fmt: QFormat,
-    mut observe: impl FnMut(&LayerPlanes),
+    observe: impl FnMut(&LayerPlanes),
 ) -> Result<(Vec<u32>, DofWork), (String, u32)> {
+    layered_fixed_exec(img, plan, p, frame_fmt, Exec::SkipUniform, observe).map(|r| (r.0, r.1))
+}
+
+/// The output codes, the work counts and per layer the pixels of skipped uniform tiles.
+pub type FixedRun = (Vec<u32>, DofWork, Vec<u64>);
+
+/// [`layered_fixed_observed`] computed as `exec` says. Also returns per layer the box pixels
+/// in skipped uniform tiles (all 0 unless `dof.skip_uniform_tiles`; the same for any `exec`).
+pub fn layered_fixed_exec(
+    img: &DepthImage<u32>,
+    plan: &LayerPlan,
+    p: &DofCfg,
+    frame_fmt: QFormat,
+    exec: Exec,
+    mut observe: impl FnMut(&LayerPlanes),
+) -> Result<FixedRun, (String, u32)> {
     let (w, h) = (img.width, img.height);
-    let f = p.coef_bits;
     let (q, g) = (p.alpha_bits, p.guard_bits);
     let line_max: u128 = (1u128 << p.line_bits) - 1;
     let acc_max: u128 = (1u128 << p.acc_bits) - 1;
     let mut work = DofWork::default();
+    let mut skipped = vec![0u64; plan.layers.len()];
     let mut out = vec![0u128; w * h];
     let mut def = vec![false; w * h];
     let one_q = 1u128 << q;
+    let n2 = img.n2 as u128;
+    let boxes = layer_boxes(w, h, plan);
     for (l, layer) in plan.layers.iter().enumerate() {
-        let all = plan.background == Some(l);
-        let Some((x0, y0, x1, y1)) = layer_box(w, h, &plan.index, l, layer.m, all) else {
+        let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
         };
         let (bw, bh) = (x1 - x0, y1 - y0);
@@ -166,12 +268,14 @@ pub fn layered_fixed_observed(
         // Input planes over the box.
         let mut xi = vec![0u128; bw * bh];
         let mut ai = vec![0u128; bw * bh];
+        let mut val = vec![0u64; bw * bh];
         for y in 0..bh {
             for x in 0..bw {
                 let pi = (y + y0) * w + x + x0;
                 let s = share(plan, img.key[pi], img.cov[pi], plan.index[pi], l, img.n2);
                 xi[y * bw + x] = img.value[pi] as u128 * s as u128;
                 ai[y * bw + x] = s as u128;
+                val[y * bw + x] = img.value[pi] as u64;
             }
         }
         if layer.m == 0 {
@@ -192,24 +296,71 @@ pub fn layered_fixed_observed(
             }
             continue;
         }
+        // Uniform windows (docs/dof.md): exact without MACs where, besides the window being
+        // uniform, neither word saturates and the box's tap sums are the image's.
+        let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
+        let full: Vec<bool> = ai.iter().map(|&a| a == n2).collect();
+        let win = uniform::windows(bw, bh, layer.m, &full, &val);
+        let mut u = win.u;
+        for y in 0..bh {
+            for x in 0..bw {
+                let i = y * bw + x;
+                if u[i] {
+                    let hxv = xi[i] * bsx[x] as u128;
+                    u[i] = hxv <= line_max
+                        && hxv * bsy[y] as u128 <= acc_max
+                        && bsx[x] == wx[x + x0]
+                        && bsy[y] == wy[y + y0];
+                }
+            }
+        }
+        // The hardware option: 16x16 tiles of uniform pixels skip both passes.
+        let tile_skip = if p.skip_uniform_tiles {
+            let (tiles, mask) = uniform::skipped_tiles(&u, (x0, y0, bw, bh));
+            work.skipped_tiles += tiles;
+            skipped[l] = mask.iter().filter(|&&b| b).count() as u64;
+            Some(mask)
+        } else {
+            None
+        };
+        let active = (bw * bh) as u64 - skipped[l];
+        let hu = match exec {
+            Exec::Full => None,
+            Exec::SkipUniform => Some(&win.hu[..]),
+        };
         // Horizontal pass into the line buffer.
         let mut hx = vec![0u128; bw * bh];
         let mut ha = vec![0u128; bw * bh];
+        let wide_h = !fast::fits_u64(xi.iter().copied().max().unwrap_or(0).max(n2), p.coef_bits);
         for y in 0..bh {
             let (rx, ra) = (&xi[y * bw..(y + 1) * bw], &ai[y * bw..(y + 1) * bw]);
             for x in 0..bw {
-                let r = row_mac(c, x, bw, line_max, |i| (rx[i], ra[i]));
-                work.macs += 2 * c.len() as u64;
+                let i = y * bw + x;
+                let r = match hu {
+                    None => row_mac(c, x, bw, line_max, |i| (rx[i], ra[i])),
+                    Some(hu) if hu[i] => {
+                        fast::mac_out(rx[x] * bsx[x] as u128, ra[x] * bsx[x] as u128, line_max)
+                    }
+                    Some(_) => {
+                        let (sx, sa) = if wide_h {
+                            fast::hsum::<u128>(c, rx, ra, x)
+                        } else {
+                            fast::hsum::<u64>(c, rx, ra, x)
+                        };
+                        fast::mac_out(sx, sa, line_max)
+                    }
+                };
                 if r.overflow {
                     work.line_overflows += 1;
                     if p.overflow == Overflow::Error {
                         return Err(("dof.line".into(), p.line_bits));
                     }
                 }
-                hx[y * bw + x] = r.x;
-                ha[y * bw + x] = r.a;
+                hx[i] = r.x;
+                ha[i] = r.a;
             }
         }
+        work.macs += 2 * c.len() as u64 * active;
         observe(&LayerPlanes {
             layer: l,
             x0,
@@ -222,10 +373,42 @@ pub fn layered_fixed_observed(
             ha: &ha,
         });
         // Vertical pass, colour, alpha, composite.
+        let hmax = hx.iter().chain(&ha).copied().max().unwrap_or(0);
+        let wide_v = !fast::fits_u64(hmax, p.coef_bits);
+        let mut rows = RowSums::new(bw, wide_v);
         for y in 0..bh {
+            let ur = &u[y * bw..(y + 1) * bw];
+            if exec == Exec::SkipUniform {
+                rows.fill(c, &hx, &ha, (bw, bh), y, ur);
+            }
             for x in 0..bw {
-                let r = row_mac(c, y, bh, acc_max, |i| (hx[i * bw + x], ha[i * bw + x]));
-                work.macs += 2 * c.len() as u64;
+                let i = y * bw + x;
+                let pi = (y + y0) * w + x + x0;
+                let skip = tile_skip.as_ref().is_some_and(|t| t[i]);
+                if exec == Exec::SkipUniform && ur[x] {
+                    // Uniform window: colour v exactly, alpha one (docs/dof.md).
+                    if !skip {
+                        work.divides += 1;
+                    }
+                    composite(
+                        &mut out[pi],
+                        &mut def[pi],
+                        (val[i] as u128) << g,
+                        one_q,
+                        one_q,
+                        q,
+                        p.quant,
+                    );
+                    work.composites += 1;
+                    continue;
+                }
+                let r = match exec {
+                    Exec::Full => row_mac(c, y, bh, acc_max, |i| (hx[i * bw + x], ha[i * bw + x])),
+                    Exec::SkipUniform => {
+                        let (sx, sa) = rows.get(x);
+                        fast::mac_out(sx, sa, acc_max)
+                    }
+                };
                 if r.overflow {
                     work.acc_overflows += 1;
                     if p.overflow == Overflow::Error {
@@ -236,17 +419,18 @@ pub fn layered_fixed_observed(
                 if sa == 0 {
                     continue;
                 }
-                let pi = (y + y0) * w + x + x0;
-                work.divides += 1;
+                if !skip {
+                    work.divides += 1;
+                }
                 // colour = round(F 2^g / A): half-up integer divide
                 let col = ((sx << (g + 1)) / sa).div_ceil(2);
                 let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
                 let aq = (((sa << (q + 1)) / ws).div_ceil(2)).min(one_q);
-                let _ = f;
                 composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
                 work.composites += 1;
             }
         }
+        work.macs += 2 * c.len() as u64 * active;
     }
     // The composite carries `g` guard bits below the frame LSB.
     let frame_q = Quantizer::new(frame_fmt, p.quant, Overflow::Sat);
@@ -259,7 +443,7 @@ pub fn layered_fixed_observed(
             r.code as u32
         })
         .collect();
-    Ok((res, work))
+    Ok((res, work, skipped))
 }
 
 #[inline]

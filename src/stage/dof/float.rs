@@ -1,7 +1,9 @@
 //! Float reference (1): the fixed datapath's layers and masks in f64 arithmetic.
 
+use super::fixed::Exec;
 use super::fixed::{border_sums, share};
-use super::layers::{DepthImage, LayerPlan, layer_box};
+use super::layers::{DepthImage, LayerPlan, layer_boxes};
+use super::uniform;
 
 /// The float taps on the fixed mask's support (taps that quantise to 0 are 0), renormalised
 /// to sum 1. The support decides which layers reach a pixel and hence which one fills it
@@ -21,12 +23,39 @@ fn on_fixed_support(tf: &[f64], t: &[u64]) -> Vec<f64> {
 /// Float reference (1): the same layers and masks (float taps on the fixed taps' support),
 /// f64 arithmetic.
 pub fn layered_f64(img: &DepthImage<f64>, plan: &LayerPlan) -> Vec<f64> {
+    layered_f64_exec(img, plan, Exec::SkipUniform)
+}
+
+/// The sum `sum_t c[t] v` over the taps `t0..t1`, in tap order from 0 (the passes' order).
+#[inline]
+fn fold(c: &[f64], (t0, t1): (usize, usize), v: f64) -> f64 {
+    let mut s = 0.0;
+    for &cv in &c[t0..t1] {
+        s += cv * v;
+    }
+    s
+}
+
+/// The taps of position `pos` on a line of `len` samples that fall on the line.
+#[inline]
+fn tap_range(c: &[f64], pos: usize, len: usize) -> (usize, usize) {
+    let m = c.len() / 2;
+    (
+        m.saturating_sub(pos),
+        c.len().min((len + m).saturating_sub(pos)),
+    )
+}
+
+/// [`layered_f64`] computed as `exec` says (bit-identical either way): with
+/// `Exec::SkipUniform` a uniform window's sums are one [`fold`] of its value (remembered for
+/// the last value), the vertical pass runs row by row.
+pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> Vec<f64> {
     let (w, h) = (img.width, img.height);
     let mut out = vec![0.0f64; w * h];
     let mut def = vec![false; w * h];
+    let boxes = layer_boxes(w, h, plan);
     for (l, layer) in plan.layers.iter().enumerate() {
-        let all = plan.background == Some(l);
-        let Some((x0, y0, x1, y1)) = layer_box(w, h, &plan.index, l, layer.m, all) else {
+        let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
         };
         let (bw, bh) = (x1 - x0, y1 - y0);
@@ -45,29 +74,33 @@ pub fn layered_f64(img: &DepthImage<f64>, plan: &LayerPlan) -> Vec<f64> {
                 ai[y * bw + x] = s;
             }
         }
-        let pass = |src: &[f64], horizontal: bool| -> Vec<f64> {
-            let mut dst = vec![0.0; bw * bh];
-            for y in 0..bh {
-                for x in 0..bw {
-                    let mut s = 0.0;
-                    for (t, &cv) in c.iter().enumerate() {
-                        let (xx, yy) = if horizontal {
-                            (x as i64 + t as i64 - m, y as i64)
-                        } else {
-                            (x as i64, y as i64 + t as i64 - m)
-                        };
-                        if xx < 0 || yy < 0 || xx >= bw as i64 || yy >= bh as i64 {
-                            continue;
+        let (fx, fa) = match exec {
+            Exec::Full => {
+                let pass = |src: &[f64], horizontal: bool| -> Vec<f64> {
+                    let mut dst = vec![0.0; bw * bh];
+                    for y in 0..bh {
+                        for x in 0..bw {
+                            let mut s = 0.0;
+                            for (t, &cv) in c.iter().enumerate() {
+                                let (xx, yy) = if horizontal {
+                                    (x as i64 + t as i64 - m, y as i64)
+                                } else {
+                                    (x as i64, y as i64 + t as i64 - m)
+                                };
+                                if xx < 0 || yy < 0 || xx >= bw as i64 || yy >= bh as i64 {
+                                    continue;
+                                }
+                                s += cv * src[yy as usize * bw + xx as usize];
+                            }
+                            dst[y * bw + x] = s;
                         }
-                        s += cv * src[yy as usize * bw + xx as usize];
                     }
-                    dst[y * bw + x] = s;
-                }
+                    dst
+                };
+                (pass(&pass(&xi, true), false), pass(&pass(&ai, true), false))
             }
-            dst
+            Exec::SkipUniform => fast_passes(c, (bw, bh), &xi, &ai),
         };
-        let fx = pass(&pass(&xi, true), false);
-        let fa = pass(&pass(&ai, true), false);
         for y in 0..bh {
             for x in 0..bw {
                 let a = fa[y * bw + x];
@@ -87,4 +120,86 @@ pub fn layered_f64(img: &DepthImage<f64>, plan: &LayerPlan) -> Vec<f64> {
         }
     }
     out
+}
+
+/// Both passes of both planes over a `bw x bh` box, the same sums in the same order as the
+/// per-sample passes: uniform windows (docs/dof.md) by [`fold`], the rest row by row.
+fn fast_passes(
+    c: &[f64],
+    (bw, bh): (usize, usize),
+    xi: &[f64],
+    ai: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    let m = c.len() / 2;
+    let full: Vec<bool> = ai.iter().map(|&a| a == 1.0).collect();
+    let val: Vec<u64> = xi.iter().map(|v| v.to_bits()).collect();
+    let win = uniform::windows(bw, bh, m, &full, &val);
+    let bsx = border_sums(c, bw);
+    // Horizontal pass.
+    let (mut hx, mut ha) = (vec![0.0; bw * bh], vec![0.0; bw * bh]);
+    let mut last = (u64::MAX, 0.0f64); // (value bits, interior row sum)
+    for y in 0..bh {
+        #[allow(clippy::needless_range_loop)] // x is the position, not only an index
+        for x in 0..bw {
+            let i = y * bw + x;
+            let r = tap_range(c, x, bw);
+            if win.hu[i] {
+                let v = xi[i];
+                hx[i] = if r == (0, c.len()) {
+                    if last.0 != v.to_bits() {
+                        last = (v.to_bits(), fold(c, r, v));
+                    }
+                    last.1
+                } else {
+                    fold(c, r, v)
+                };
+                ha[i] = bsx[x];
+                continue;
+            }
+            let base = y * bw + x + r.0 - m;
+            let (mut sx, mut sa) = (0.0, 0.0);
+            for (k, &cv) in c[r.0..r.1].iter().enumerate() {
+                sx += cv * xi[base + k];
+                sa += cv * ai[base + k];
+            }
+            hx[i] = sx;
+            ha[i] = sa;
+        }
+    }
+    // Vertical pass: all the window's line sums of a uniform pixel equal its own.
+    let ga: Vec<f64> = bsx.iter().map(|&b| fold(c, (0, c.len()), b)).collect();
+    let (mut fx, mut fa) = (vec![0.0; bw * bh], vec![0.0; bw * bh]);
+    let mut last = (u64::MAX, 0.0f64);
+    for y in 0..bh {
+        let r = tap_range(c, y, bh);
+        let interior = r == (0, c.len());
+        let row = y * bw..(y + 1) * bw;
+        let ur = &win.u[row.clone()];
+        let (ox, oa) = (&mut fx[row.clone()], &mut fa[row]);
+        let mut x = 0;
+        while x < bw {
+            if interior && ur[x] {
+                let hv = hx[y * bw + x];
+                if last.0 != hv.to_bits() {
+                    last = (hv.to_bits(), fold(c, r, hv));
+                }
+                ox[x] = last.1;
+                oa[x] = ga[x];
+                x += 1;
+                continue;
+            }
+            let xa = x;
+            while x < bw && !(interior && ur[x]) {
+                x += 1;
+            }
+            for (t, &cv) in c.iter().enumerate().take(r.1).skip(r.0) {
+                let src = (y + t - m) * bw;
+                for k in xa..x {
+                    ox[k] += cv * hx[src + k];
+                    oa[k] += cv * ha[src + k];
+                }
+            }
+        }
+    }
+    (fx, fa)
 }

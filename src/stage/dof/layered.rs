@@ -4,8 +4,8 @@
 
 use super::method::{Method, half_size_error, n2};
 use super::{
-    DepthImage, LayerPlan, LensMap, layer_work, layered_f64, layered_fixed, overflow_signal,
-    overflow_signal_in, plan_layers,
+    DepthImage, Exec, LayerPlan, LayerWork, LensMap, layer_work, layered_f64, layered_fixed_exec,
+    overflow_signal, overflow_signal_in, plan_layers,
 };
 use crate::error::{Error, Result};
 use crate::stage::accumulate::Frame;
@@ -26,17 +26,19 @@ impl Method for Layered {
         let hw = cx.hw;
         let p = &hw.dof;
         let frame_fmt = hw.accumulate.frame.format;
-        let plan = plan_layers(&frame.depth, &frame.coverage, n2(cx), lens, p)
+        let mut plan = plan_layers(&frame.depth, &frame.coverage, n2(cx), lens, p)
             .map_err(|msg| half_size_error(cx, msg))?;
         let img = DepthImage::of_frame(frame, &frame.acc, n2(cx));
-        let (out, work) =
-            layered_fixed(&img, &plan, p, frame_fmt).map_err(|(signal, bits)| Error::Overflow {
-                signal,
-                format: format!("UQ{bits}.0"),
-                value: 1i128 << bits,
-                min: 0,
-                max: ((1u128 << bits.min(63)) - 1) as i64,
-            })?;
+        let (out, work, skipped) =
+            layered_fixed_exec(&img, &plan, p, frame_fmt, Exec::SkipUniform, |_| {}).map_err(
+                |(signal, bits)| Error::Overflow {
+                    signal,
+                    format: format!("UQ{bits}.0"),
+                    value: 1i128 << bits,
+                    min: 0,
+                    max: ((1u128 << bits.min(63)) - 1) as i64,
+                },
+            )?;
         let mut facts = Facts {
             work: vec![
                 ("layers", plan.layers.len() as u64),
@@ -53,6 +55,11 @@ impl Method for Layered {
             ],
             ..Facts::default()
         };
+        if p.skip_uniform_tiles {
+            facts.work.push(("skipped_tiles", work.skipped_tiles));
+            facts.work.push(("skipped_pixels", skipped.iter().sum()));
+        }
+        plan.skipped = skipped;
         facts.note("layers", &plan.layers);
         Ok((plan, out, facts))
     }
@@ -68,14 +75,32 @@ impl Method for Layered {
         layered_f64(&DepthImage::of_frame(frame, value, n2(cx)), plan)
     }
 
-    /// One token per layer: the output samples of both 1-D passes over its box.
+    /// One token per layer: the output samples of both 1-D passes over its box. With
+    /// `dof.skip_uniform_tiles` the pixels of skipped tiles produce none, and the detection
+    /// scans each blurred layer's box at one pixel per clock: the first layer's scan before
+    /// its passes, each next one's alongside the passes of the layer before (a second frame
+    /// read port), so a layer takes the longer of its passes and the next scan.
     fn tokens(&self, cx: &Cx, plan: &LayerPlan) -> Tokens {
         let g = &cx.layout.grid;
         let layers = layer_work(plan, g.width as usize, g.height as usize);
+        let items = if cx.hw.dof.skip_uniform_tiles {
+            let scan = |l: &LayerWork| if l.taps > 1 { l.pixels } else { 0 };
+            layers
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    let own = 2 * (l.pixels - l.skipped);
+                    let next = layers.get(i + 1).map_or(0, scan);
+                    own.max(next) + if i == 0 { scan(l) } else { 0 }
+                })
+                .collect()
+        } else {
+            layers.iter().map(|l| 2 * l.pixels).collect()
+        };
         Tokens {
             kind: TokenKind::Layer,
             item: "pass outputs",
-            items: layers.iter().map(|l| 2 * l.pixels).collect(),
+            items,
             port_bits: vec![],
         }
     }

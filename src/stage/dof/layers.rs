@@ -2,7 +2,7 @@
 //! and each layer's bounding box and work for the cycle model.
 
 use super::lens::{LensMap, SIGMA_FRAC};
-use super::mask::{half_size, mask_difference, taps_f64, taps_fixed};
+use super::mask::{MaskDifferences, half_size, taps_f64, taps_fixed};
 use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
 use serde::Serialize;
 
@@ -72,6 +72,9 @@ pub struct LayerPlan {
     pub index: Vec<u16>,
     /// Index of the layer holding the background (uncovered shares), if any.
     pub background: Option<usize>,
+    /// Per layer, the box pixels in uniform tiles the hardware skips
+    /// (`dof.skip_uniform_tiles`; set by the fixed run, empty otherwise).
+    pub skipped: Vec<u64>,
 }
 
 /// Grows the layers far to near (see the module notes). Errors name the limit exceeded.
@@ -82,8 +85,9 @@ pub fn plan_layers(
     lens: &LensMap,
     p: &DofCfg,
 ) -> Result<LayerPlan, String> {
-    let mut keys: Vec<u32> = key.to_vec();
-    if cov.iter().any(|&c| (c as u32) < n2) {
+    // The background code (most pixels of a typical frame) is added once, not sorted.
+    let mut keys: Vec<u32> = key.iter().copied().filter(|&k| k != u32::MAX).collect();
+    if key.contains(&u32::MAX) || cov.iter().any(|&c| (c as u32) < n2) {
         keys.push(u32::MAX);
     }
     keys.sort_unstable_by(|a, b| b.cmp(a));
@@ -126,6 +130,8 @@ pub fn plan_layers(
         };
         (zm, sig(c))
     };
+    let mut diffs = MaskDifferences::default();
+    let mut mask_difference = |a: f64, b: f64, k: f64| diffs.get(a, b, k);
     let mut layers: Vec<Layer> = Vec::new();
     let mut i = 0;
     while i < keys.len() {
@@ -189,6 +195,7 @@ pub fn plan_layers(
         layers,
         index,
         background,
+        skipped: Vec::new(),
     })
 }
 
@@ -200,6 +207,8 @@ pub struct LayerWork {
     pub pixels: u64,
     /// Mask taps `2M + 1` (1: passed through).
     pub taps: u32,
+    /// Pixels of the box in skipped uniform tiles (`dof.skip_uniform_tiles`; else 0).
+    pub skipped: u64,
 }
 
 /// The layers [`layered_fixed`](super::layered_fixed) processes, in its order, with their boxes.
@@ -213,7 +222,48 @@ pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWor
             Some(LayerWork {
                 pixels: ((x1 - x0) * (y1 - y0)) as u64,
                 taps: 2 * layer.m as u32 + 1,
+                skipped: plan.skipped.get(l).copied().unwrap_or(0),
             })
+        })
+        .collect()
+}
+
+/// [`layer_box`] of every layer of `plan` in one pass over the index image.
+pub(super) fn layer_boxes(
+    w: usize,
+    h: usize,
+    plan: &LayerPlan,
+) -> Vec<Option<(usize, usize, usize, usize)>> {
+    let n = plan.layers.len();
+    let mut b = vec![(usize::MAX, usize::MAX, 0usize, 0usize); n];
+    for y in 0..h {
+        for (x, &l) in plan.index[y * w..(y + 1) * w].iter().enumerate() {
+            let Some(e) = b.get_mut(l as usize) else {
+                continue;
+            };
+            e.0 = e.0.min(x);
+            e.1 = e.1.min(y);
+            e.2 = e.2.max(x + 1);
+            e.3 = e.3.max(y + 1);
+        }
+    }
+    b.into_iter()
+        .zip(&plan.layers)
+        .enumerate()
+        .map(|(l, ((x0, y0, x1, y1), layer))| {
+            if plan.background == Some(l) {
+                Some((0, 0, w, h))
+            } else if x0 == usize::MAX {
+                None
+            } else {
+                let m = layer.m;
+                Some((
+                    x0.saturating_sub(m),
+                    y0.saturating_sub(m),
+                    (x1 + m).min(w),
+                    (y1 + m).min(h),
+                ))
+            }
         })
         .collect()
 }

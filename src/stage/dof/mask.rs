@@ -57,7 +57,39 @@ pub fn taps_fixed(tf: &[f64], f: u32) -> Vec<u64> {
 
 /// Difference degree of the 2-D separable masks of two sigmas (docs/reference.md §3, eq. 6).
 pub fn mask_difference(s1: f64, s2: f64, k: f64) -> f64 {
-    let (a, b) = (taps_f64(s1, k), taps_f64(s2, k));
+    taps_difference(&taps_f64(s1, k), &taps_f64(s2, k))
+}
+
+/// [`mask_difference`] remembering its results and taps: the layer plan asks for the same
+/// few sigmas (sigma codes are quantised) once per depth code pair. Bit-identical.
+#[derive(Default)]
+pub(super) struct MaskDifferences {
+    taps: std::collections::HashMap<u64, std::rc::Rc<Vec<f64>>>,
+    diff: std::collections::HashMap<(u64, u64), f64>,
+}
+
+impl MaskDifferences {
+    /// `mask_difference(s1, s2, k)` (`k` must be the same on every call).
+    pub(super) fn get(&mut self, s1: f64, s2: f64, k: f64) -> f64 {
+        let key = (s1.to_bits(), s2.to_bits());
+        if let Some(&d) = self.diff.get(&key) {
+            return d;
+        }
+        let mut taps = |s: f64| {
+            self.taps
+                .entry(s.to_bits())
+                .or_insert_with(|| std::rc::Rc::new(taps_f64(s, k)))
+                .clone()
+        };
+        let (a, b) = (taps(s1), taps(s2));
+        let d = taps_difference(&a, &b);
+        self.diff.insert(key, d);
+        d
+    }
+}
+
+/// Difference degree of the 2-D separable masks with 1-D taps `a` and `b`.
+fn taps_difference(a: &[f64], b: &[f64]) -> f64 {
     let m = a.len().max(b.len()) / 2;
     let get = |t: &[f64], i: usize| {
         let h = t.len() / 2;
@@ -71,9 +103,9 @@ pub fn mask_difference(s1: f64, s2: f64, k: f64) -> f64 {
     let n = 2 * m + 1;
     let mut d = 0.0;
     for y in 0..n {
-        let (ay, by) = (get(&a, y), get(&b, y));
+        let (ay, by) = (get(a, y), get(b, y));
         for x in 0..n {
-            d += (ay * get(&a, x) - by * get(&b, x)).abs();
+            d += (ay * get(a, x) - by * get(b, x)).abs();
         }
     }
     d / 2.0

@@ -90,6 +90,7 @@
 
 mod cost;
 pub mod downsample;
+mod fast;
 mod fixed;
 mod float;
 mod layered;
@@ -101,15 +102,17 @@ mod method;
 mod potentiate;
 mod reference;
 mod stage;
+mod uniform;
 
 pub use cost::{
     COEF_ROM, COMPOSITE, LINE_BUFFERS, SIGMA_ROM, coefficient_image, cost, lens_cost,
     overflow_signal, overflow_signal_in, sigma_rom_image,
 };
 pub use fixed::{
-    DofWork, LayerPlanes, MacOut, border_sum, layered_fixed, layered_fixed_observed, row_mac,
+    DofWork, Exec, FixedRun, LayerPlanes, MacOut, border_sum, layered_fixed, layered_fixed_exec,
+    layered_fixed_observed, row_mac,
 };
-pub use float::layered_f64;
+pub use float::{layered_f64, layered_f64_exec};
 pub use layers::{DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layers};
 pub use lens::{G_FRAC, LensMap, SIGMA_FRAC};
 pub use mask::{difference_degree, half_size, mask_difference, taps_f64, taps_fixed};
@@ -120,3 +123,4 @@ pub use reference::{
     region_error, weber_linear,
 };
 pub use stage::Dof;
+pub use uniform::UNIFORM_TILE;

@@ -1,0 +1,111 @@
+//! The emulator's fast tap passes of a fixed layer, bit-identical to the per-sample
+//! [`row_mac`](super::row_mac) passes of [`layered_fixed`](super::layered_fixed) with
+//! `Exec::Full`: the horizontal sum of a uniform row window is `x * W_x` (no MACs), the
+//! vertical pass accumulates whole rows (contiguous reads) and only over the pixels whose
+//! window is not uniform, in `u64` whenever the exact sums provably fit. The work counts are
+//! the caller's (they model the hardware, not this code).
+
+use super::fixed::MacOut;
+
+/// A tap-sum word: `u64` when every exact sum fits it, `u128` otherwise.
+pub(super) trait Word:
+    Copy + Default + std::ops::AddAssign + std::ops::Mul<Output = Self>
+{
+    fn of(v: u128) -> Self;
+    fn wide(self) -> u128;
+}
+
+impl Word for u64 {
+    #[inline(always)]
+    fn of(v: u128) -> Self {
+        v as u64
+    }
+    #[inline(always)]
+    fn wide(self) -> u128 {
+        self as u128
+    }
+}
+
+impl Word for u128 {
+    #[inline(always)]
+    fn of(v: u128) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn wide(self) -> u128 {
+        self
+    }
+}
+
+/// Whether sums of `max * 2^f` fit a `u64` (the taps sum to `2^f`).
+pub(super) fn fits_u64(max: u128, f: u32) -> bool {
+    max.checked_shl(f)
+        .is_some_and(|b| b >> f == max && b < 1u128 << 64)
+}
+
+/// The horizontal pass of row `src` (`bw` samples, taps `c`) at the positions `need`
+/// selects: the exact colour and alpha sums (before saturation).
+#[inline]
+pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u128], ra: &[u128], x: usize) -> (u128, u128) {
+    let m = c.len() / 2;
+    let bw = rx.len();
+    let t0 = m.saturating_sub(x);
+    let t1 = c.len().min((bw + m).saturating_sub(x));
+    let (mut sx, mut sa) = (W::default(), W::default());
+    let base = x + t0 - m;
+    let n = t1.saturating_sub(t0);
+    for ((&cv, &vx), &va) in c[t0..t0 + n]
+        .iter()
+        .zip(&rx[base..base + n])
+        .zip(&ra[base..base + n])
+    {
+        let cw = W::of(cv as u128);
+        sx += cw * W::of(vx);
+        sa += cw * W::of(va);
+    }
+    (sx.wide(), sa.wide())
+}
+
+/// The vertical pass of output row `y` of a `bw x bh` box over the columns `xa..xb`: the
+/// exact colour and alpha sums into `ox`, `oa` (indexed by column).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(super) fn vsum_row<W: Word>(
+    c: &[u64],
+    hx: &[u128],
+    ha: &[u128],
+    (bw, bh): (usize, usize),
+    y: usize,
+    (xa, xb): (usize, usize),
+    ox: &mut [W],
+    oa: &mut [W],
+) {
+    let m = c.len() / 2;
+    let t0 = m.saturating_sub(y);
+    let t1 = c.len().min((bh + m).saturating_sub(y));
+    let (ox, oa) = (&mut ox[xa..xb], &mut oa[xa..xb]);
+    ox.fill(W::default());
+    oa.fill(W::default());
+    for (t, &cv) in c.iter().enumerate().take(t1).skip(t0) {
+        let row = (y + t - m) * bw;
+        let cw = W::of(cv as u128);
+        for ((o, &v), (p, &a)) in ox
+            .iter_mut()
+            .zip(&hx[row + xa..row + xb])
+            .zip(oa.iter_mut().zip(&ha[row + xa..row + xb]))
+        {
+            *o += cw * W::of(v);
+            *p += cw * W::of(a);
+        }
+    }
+}
+
+/// A saturated [`MacOut`] of exact sums.
+#[inline(always)]
+pub(super) fn mac_out(sx: u128, sa: u128, max: u128) -> MacOut {
+    MacOut {
+        x: sx.min(max),
+        a: sa,
+        overflow: sx > max,
+    }
+}

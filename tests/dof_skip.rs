@@ -1,0 +1,210 @@
+//! The layered DoF's uniform-window skip (docs/dof.md, "Uniform windows"): the fast
+//! computation (`Exec::SkipUniform`, the default) against every tap computed (`Exec::Full`),
+//! fixed and float, bit for bit with the same work counts, on the embedded scenes, the depth
+//! ramp and random depth images; and the hardware option `dof.skip_uniform_tiles`.
+
+use igemu::config::{DofCfg, HwConfig, SigmaForm};
+use igemu::fixed::{Overflow, QFormat};
+use igemu::pipeline;
+use igemu::scene::Scene;
+use igemu::stage::dof::{
+    DepthImage, Exec, LayerPlan, LensMap, layered_f64_exec, layered_fixed_exec, plan_layers,
+};
+use igemu::stage::{RunOptions, StageId};
+use proptest::prelude::*;
+
+const FRAME: QFormat = QFormat::new(false, 12, 0);
+
+/// Both executions of the fixed and float layered DoF agree bit for bit (outputs, work
+/// counts, skipped tiles, overflow errors). Returns the fast run's work and skipped tiles.
+fn check(img: &DepthImage<u32>, plan: &LayerPlan, p: &DofCfg, fmt: QFormat) -> Option<u64> {
+    let full = layered_fixed_exec(img, plan, p, fmt, Exec::Full, |_| {});
+    let fast = layered_fixed_exec(img, plan, p, fmt, Exec::SkipUniform, |_| {});
+    assert_eq!(full, fast, "fixed layered: skip vs full");
+    let vf: Vec<f64> = img.value.iter().map(|&v| v as f64 * 0.37).collect();
+    let fi = DepthImage {
+        value: &vf[..],
+        width: img.width,
+        height: img.height,
+        key: img.key,
+        cov: img.cov,
+        n2: img.n2,
+    };
+    let a = layered_f64_exec(&fi, plan, Exec::Full);
+    let b = layered_f64_exec(&fi, plan, Exec::SkipUniform);
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&a), bits(&b), "float layered: skip vs full");
+    fast.ok().map(|r| r.1.skipped_tiles)
+}
+
+/// The fixed frame of a scene (after accumulate) and its lens.
+fn scene_frame(scene: &Scene, hw: &HwConfig) -> (igemu::stage::accumulate::Frame, LensMap) {
+    let (_, taps) =
+        pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Accumulate).unwrap();
+    let fr = taps.fixed.frame().frame.clone();
+    let lens = LensMap::from_camera(
+        &scene.camera,
+        fr.height,
+        hw.visibility.z.format.frac_bits,
+        hw.dof.sigma,
+        hw.dof.sigma_rom_bits,
+    )
+    .unwrap();
+    (fr, lens)
+}
+
+fn check_scene(scene: &Scene) {
+    let hw = HwConfig::default_config();
+    let (fr, lens) = scene_frame(scene, &hw);
+    let plan = plan_layers(&fr.depth, &fr.coverage, 16, &lens, &hw.dof).unwrap();
+    let img = DepthImage::of_frame(&fr, &fr.acc, 16);
+    let fmt = hw.accumulate.frame.format;
+    check(&img, &plan, &hw.dof, fmt);
+    let mut on = hw.dof.clone();
+    on.skip_uniform_tiles = true;
+    let tiles = check(&img, &plan, &on, fmt).unwrap();
+    // The option changes the counts only: fewer MACs and divides, the same codes.
+    let (o0, w0) = layered_fixed_exec(&img, &plan, &hw.dof, fmt, Exec::SkipUniform, |_| {})
+        .map(|r| (r.0, r.1))
+        .unwrap();
+    let (o1, w1, skipped) =
+        layered_fixed_exec(&img, &plan, &on, fmt, Exec::SkipUniform, |_| {}).unwrap();
+    assert_eq!(o0, o1);
+    assert!(tiles > 0 && skipped.iter().sum::<u64>() > 0);
+    assert!(
+        w1.macs < w0.macs && w1.divides < w0.divides,
+        "{w0:?} {w1:?}"
+    );
+    assert_eq!(
+        (w1.composites, w1.passthrough),
+        (w0.composites, w0.passthrough)
+    );
+}
+
+#[test]
+fn embedded_scenes_skip_is_exact() {
+    check_scene(&Scene::default_scene());
+    check_scene(&Scene::embedded("cone-focus").unwrap());
+}
+
+#[test]
+fn depth_ramp_skip_is_exact() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/depth-ramp.toml");
+    check_scene(&Scene::load(path).unwrap());
+}
+
+/// A synthetic lens: sigma = 12 (z - 0.5) behind 0.5, 12 (z - 0.4) in front of 0.4 (pixels).
+fn lens() -> LensMap {
+    LensMap {
+        form: SigmaForm::Affine,
+        k: 12.0,
+        inv_focus: 0.55,
+        deep: 0.0,
+        inv_near: 1.0,
+        inv_far: 0.0,
+        rom_bits: 10,
+        rom: Vec::new().into(),
+        g: 12.0,
+        z_far_edge: 0.5,
+        z_near_edge: 0.4,
+        z_inf: 1.0,
+        z_frac: 16,
+        coc_px: 1.0,
+    }
+}
+
+/// A random depth image of flat blocks (so that uniform windows occur), with background,
+/// partial coverage and a few values.
+fn blocks(w: usize, h: usize, seed: u64, b: usize) -> (Vec<u32>, Vec<u32>, Vec<u16>) {
+    let mut s = seed | 1;
+    let mut next = |n: u64| {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s % n
+    };
+    let (bx, by) = (w.div_ceil(b), h.div_ceil(b));
+    let cells: Vec<(u32, u32, u16)> = (0..bx * by)
+        .map(|_| {
+            let v = [0, 1, 700, 4095][next(4) as usize];
+            let z = [0.2, 0.45, 0.6, 0.8, 0.95][next(5) as usize];
+            let k = if next(5) == 0 {
+                u32::MAX
+            } else {
+                (z * 65536.0) as u32
+            };
+            let c = if k == u32::MAX {
+                0
+            } else if next(4) == 0 {
+                next(16) as u16
+            } else {
+                16
+            };
+            (v, k, c)
+        })
+        .collect();
+    let (mut v, mut k, mut c) = (vec![0; w * h], vec![0; w * h], vec![0; w * h]);
+    for y in 0..h {
+        for x in 0..w {
+            let (cv, ck, cc) = cells[(y / b) * bx + x / b];
+            v[y * w + x] = cv;
+            k[y * w + x] = ck;
+            c[y * w + x] = cc;
+        }
+    }
+    (v, k, c)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    /// Random block images, tiny to medium, with masks larger than the image, narrow words
+    /// (saturation, ERROR) and the hardware option: the skip is exact.
+    #[test]
+    fn random_depth_images_skip_is_exact(
+        w in 1usize..70, h in 1usize..50, seed in any::<u64>(), b in 1usize..24,
+        narrow in 0u32..3, tiles in any::<bool>(),
+    ) {
+        let (v, k, c) = blocks(w, h, seed, b);
+        let mut p = HwConfig::default_config().dof;
+        p.skip_uniform_tiles = tiles;
+        match narrow {
+            1 => { p.line_bits = 24; p.acc_bits = 30; }
+            2 => { p.line_bits = 24; p.acc_bits = 30; p.overflow = Overflow::Error; }
+            _ => {}
+        }
+        let Ok(plan) = plan_layers(&k, &c, 16, &lens(), &p) else { return Ok(()); };
+        let img = DepthImage { width: w, height: h, value: &v, key: &k, cov: &c, n2: 16 };
+        check(&img, &plan, &p, FRAME);
+    }
+}
+
+/// A flat image larger than a tile: every tile is skipped with the option, the output is
+/// the value, and the border pixels (renormalised by the in-image tap sums) are exact too.
+#[test]
+fn flat_image_is_its_value() {
+    let (w, h) = (40, 23);
+    let (v, k, c) = (
+        vec![1234u32; w * h],
+        vec![u32::MAX; w * h],
+        vec![0u16; w * h],
+    );
+    let mut p = HwConfig::default_config().dof;
+    p.skip_uniform_tiles = true;
+    let plan = plan_layers(&k, &c, 16, &lens(), &p).unwrap();
+    assert!(plan.layers[0].m > 0);
+    let img = DepthImage {
+        width: w,
+        height: h,
+        value: &v,
+        key: &k,
+        cov: &c,
+        n2: 16,
+    };
+    let tiles = check(&img, &plan, &p, FRAME).unwrap();
+    assert_eq!(tiles, 3 * 2);
+    let (out, work, skipped) =
+        layered_fixed_exec(&img, &plan, &p, FRAME, Exec::SkipUniform, |_| {}).unwrap();
+    assert!(out.iter().all(|&o| o == 1234));
+    assert_eq!((work.macs, work.divides), (0, 0));
+    assert_eq!(skipped, vec![(w * h) as u64]);
+}
