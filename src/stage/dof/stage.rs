@@ -172,18 +172,27 @@ impl Stage for Dof {
         // Blur facts.
         let (mut sig_min, mut sig_max) = (f64::INFINITY, f64::NEG_INFINITY);
         let (mut in_focus, mut coc_max) = (0u64, 0.0f64);
+        // Runs of one depth code are common: each code's sigma and CoC are computed once per
+        // run.
+        let mut last: Option<(u32, bool)> = None;
         for &k in &frame.depth {
             if k == u32::MAX {
                 continue;
             }
-            let s = lens.sigma_code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
-            sig_min = sig_min.min(s);
-            sig_max = sig_max.max(s);
-            let c = lens.coc_f64(k);
-            coc_max = coc_max.max(c);
-            if c <= lens.coc_px {
-                in_focus += 1;
-            }
+            let focused = match last {
+                Some((lk, f)) if lk == k => f,
+                _ => {
+                    let s = lens.sigma_code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
+                    sig_min = sig_min.min(s);
+                    sig_max = sig_max.max(s);
+                    let c = lens.coc_f64(k);
+                    coc_max = coc_max.max(c);
+                    let f = c <= lens.coc_px;
+                    last = Some((k, f));
+                    f
+                }
+            };
+            in_focus += u64::from(focused);
         }
         facts.note("lens", &lens);
         facts.note(
