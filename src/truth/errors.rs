@@ -108,9 +108,13 @@ pub fn dac_codes(frame: &[f64], scene: &Scene, hw: &HwConfig) -> Vec<u16> {
 /// The truth's DAC codes for `hw`: its frame scaled to `hw`'s full white, through the float
 /// reference's gamma curve and DAC (what [`assess`] compares with).
 pub fn truth_dac(truth: &TruthFrame, scene: &Scene, hw: &HwConfig) -> Vec<u16> {
+    dac_codes(&in_frame_lsb(&truth.mean, hw), scene, hw)
+}
+
+/// Values in units of full white (the truth's) in `hw`'s frame LSBs.
+fn in_frame_lsb(v: &[f64], hw: &HwConfig) -> Vec<f64> {
     let white = super::frame_white(hw);
-    let mean: Vec<f64> = truth.mean.iter().map(|v| v * white).collect();
-    dac_codes(&mean, scene, hw)
+    v.iter().map(|x| x * white).collect()
 }
 
 /// The standard error `se` of `mean` (frame LSBs) in DAC codes: half the float gamma
@@ -237,9 +241,7 @@ pub fn assess(
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let (edge, r) = edge_band(scene, hw, img.frame);
     // The truth in this hardware's frame LSBs.
-    let white = super::frame_white(hw);
-    let mean: Vec<f64> = truth.mean.iter().map(|v| v * white).collect();
-    let se: Vec<f64> = truth.se.iter().map(|v| v * white).collect();
+    let (mean, se) = (in_frame_lsb(&truth.mean, hw), in_frame_lsb(&truth.se, hw));
     let truth_dac = dac_codes(&mean, scene, hw);
     let dac_se = dac_error(&mean, &se, scene, hw);
     TruthReport {

@@ -11,6 +11,7 @@ use crate::config::{FilterKind, HwConfig};
 use crate::error::{Error, FileError, Result};
 use crate::scene::{GuardBand, Lens, LensPoint, Scene, front_end_through};
 use crate::stage::accumulate::{Kernel, float_frame, kernel, regions};
+use crate::stage::gamma::frame_white;
 use crate::stage::raster::float_frags;
 use crate::stage::visibility::float_samples;
 use crate::stage::{Grid, input};
@@ -47,12 +48,6 @@ pub fn truth_hw() -> HwConfig {
     hw.raster.samples = TRUTH_GRID;
     hw.accumulate.filter = FilterKind::Box;
     hw
-}
-
-/// Full white of `hw`'s frame in its float frame's units (frame LSBs).
-pub fn frame_white(hw: &HwConfig) -> f64 {
-    let ff = hw.accumulate.frame.format;
-    (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64
 }
 
 /// A truth frame ready to compute: the scene (with a thin lens), the lens points and their

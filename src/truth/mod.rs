@@ -39,14 +39,14 @@ mod aperture;
 mod errors;
 mod frame;
 
+pub use crate::stage::gamma::frame_white;
 pub use aperture::{lens_offsets, pixel_jitter};
 pub use errors::{
     Diff, Images, Noise, Split, Spread, TruthReport, assess, dac_codes, dac_error, edge_band,
     truth_dac,
 };
 pub use frame::{
-    TRUTH_GRID, TruthFrame, TruthSetup, batch_size, frame_white, lens_frame, mean_and_error,
-    truth_hw,
+    TRUTH_GRID, TruthFrame, TruthSetup, batch_size, lens_frame, mean_and_error, truth_hw,
 };
 
 /// Interleaved groups of lens points; the lens-sample count is a multiple of it.

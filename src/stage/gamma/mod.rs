@@ -154,13 +154,19 @@ pub fn powers_key(frame_key: u64, spec: &GammaSpec) -> u64 {
         .finish()
 }
 
+/// Full white of `hw`'s frame in the float frame's units (frame LSBs): the integer part's
+/// largest value, in units of the fraction LSB.
+pub fn frame_white(hw: &HwConfig) -> f64 {
+    let ff = hw.accumulate.frame.format;
+    (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64
+}
+
 /// The DAC-independent part of the float reference after the gamma curve:
 /// `clamp(frame_ref / white, 0, 1)^exponent` per pixel ([`GammaSpec::power`]), with
 /// `white` the frame's full white in frame LSBs. Shared by every DAC width and dither of a
 /// sweep (and by the contour metric's ideal image).
 pub fn powers(frame_ref: &[f64], hw: &HwConfig, spec: &GammaSpec) -> Vec<f64> {
-    let ff = hw.accumulate.frame.format;
-    let white_lsb = (ff.max_code() >> ff.frac_bits) as f64 * (1u64 << ff.frac_bits) as f64;
+    let white_lsb = frame_white(hw);
     frame_ref
         .par_iter()
         .map(|&v| spec.power(v / white_lsb))
