@@ -180,11 +180,13 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
                 }
                 let (px, py) = (x + lp.x0, y + lp.y0);
                 let row = y * bw;
-                let r = row_mac(c, x, bw, line_max, |i| (lp.xi[row + i], lp.ai[row + i]));
+                let r = row_mac(c, x, bw, line_max, |i| {
+                    (lp.xi[row + i] as u128, lp.ai[row + i] as u128)
+                });
                 let mut inb = |i: usize| -> (u64, u64) {
                     if (lp.x0..lp.x0 + bw).contains(&i) {
                         let j = row + i - lp.x0;
-                        (lp.xi[j] as u64, lp.ai[j] as u64)
+                        (lp.xi[j], lp.ai[j])
                     } else {
                         (0, 0)
                     }
@@ -198,12 +200,12 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
                 ]);
                 scene_v.push(v);
                 let r = row_mac(c, y, bh, acc_max, |i| {
-                    (lp.hx[i * bw + x], lp.ha[i * bw + x])
+                    (lp.hx[i * bw + x] as u128, lp.ha[i * bw + x] as u128)
                 });
                 let mut inb = |i: usize| -> (u64, u64) {
                     if (lp.y0..lp.y0 + bh).contains(&i) {
                         let j = (i - lp.y0) * bw + x;
-                        (lp.hx[j] as u64, lp.ha[j] as u64)
+                        (lp.hx[j], lp.ha[j])
                     } else {
                         (0, 0)
                     }

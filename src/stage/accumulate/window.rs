@@ -168,6 +168,17 @@ impl WindowSums {
                     }
                     continue;
                 }
+                // A block crossing an edge mostly holds two primitives: their sums in one
+                // pass, a slot lookup per primitive, not per sample.
+                if let Some(two) = two_primitives::<N>(prim, inten, ws, b0, sw) {
+                    for (id, sum, nz) in two {
+                        if nz {
+                            let s = self.slot(id, &mut last);
+                            self.frags[s].1 += sum as i64;
+                        }
+                    }
+                    continue;
+                }
                 for sy in 0..N {
                     let row = b0 + sy * sw;
                     for t in 0..N {
@@ -189,6 +200,42 @@ impl WindowSums {
             }
         }
     }
+}
+
+/// The sums `w * I` of an `N x N` block (first sample at `b0`, weights `ws`) held by at most
+/// two primitives: per primitive (id, sum, whether a sample of non-zero weight has it; only
+/// those get a fragment); `None` when a third primitive appears.
+#[inline(always)]
+fn two_primitives<const N: usize>(
+    prim: &[u32],
+    inten: &[u32],
+    ws: &[u32],
+    b0: usize,
+    sw: usize,
+) -> Option<[(u32, u64, bool); 2]> {
+    let first = prim[b0];
+    let mut second: Option<u32> = None;
+    let (mut s1, mut s2, mut nz1, mut nz2) = (0u64, 0u64, false, false);
+    for sy in 0..N {
+        let row = b0 + sy * sw;
+        let ids: &[u32; N] = prim[row..row + N].try_into().expect("N samples");
+        let is: &[u32; N] = inten[row..row + N].try_into().expect("N samples");
+        let wr: &[u32; N] = ws[sy * N..sy * N + N].try_into().expect("N weights");
+        for t in 0..N {
+            let v = wr[t] as u64 * is[t] as u64;
+            if ids[t] == first {
+                s1 += v;
+                nz1 |= wr[t] != 0;
+            } else if second.is_none_or(|s| s == ids[t]) {
+                second = Some(ids[t]);
+                s2 += v;
+                nz2 |= wr[t] != 0;
+            } else {
+                return None;
+            }
+        }
+    }
+    Some([(first, s1, nz1), (second.unwrap_or(first), s2, nz2)])
 }
 
 /// [`WindowSums::block_ids`] for `n = N`.

@@ -46,7 +46,7 @@ pub(super) fn fits_u64(max: u128, f: u32) -> bool {
 /// The horizontal pass of row `src` (`bw` samples, taps `c`) at the positions `need`
 /// selects: the exact colour and alpha sums (before saturation).
 #[inline]
-pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u128], ra: &[u128], x: usize) -> (u128, u128) {
+pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u64], ra: &[u64], x: usize) -> (u128, u128) {
     let m = c.len() / 2;
     let bw = rx.len();
     let t0 = m.saturating_sub(x);
@@ -60,8 +60,8 @@ pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u128], ra: &[u128], x: usize) -> (u
         .zip(&ra[base..base + n])
     {
         let cw = W::of(cv as u128);
-        sx += cw * W::of(vx);
-        sa += cw * W::of(va);
+        sx += cw * W::of(vx as u128);
+        sa += cw * W::of(va as u128);
     }
     (sx.wide(), sa.wide())
 }
@@ -72,8 +72,8 @@ pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u128], ra: &[u128], x: usize) -> (u
 #[inline]
 pub(super) fn vsum_row<W: Word>(
     c: &[u64],
-    hx: &[u128],
-    ha: &[u128],
+    hx: &[u64],
+    ha: &[u64],
     (bw, bh): (usize, usize),
     y: usize,
     (xa, xb): (usize, usize),
@@ -94,8 +94,8 @@ pub(super) fn vsum_row<W: Word>(
             .zip(&hx[row + xa..row + xb])
             .zip(oa.iter_mut().zip(&ha[row + xa..row + xb]))
         {
-            *o += cw * W::of(v);
-            *p += cw * W::of(a);
+            *o += cw * W::of(v as u128);
+            *p += cw * W::of(a as u128);
         }
     }
 }

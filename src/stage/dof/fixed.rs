@@ -103,13 +103,13 @@ pub struct LayerPlanes<'a> {
     /// Box height.
     pub bh: usize,
     /// Input colour plane `x * m` (row-major over the box).
-    pub xi: &'a [u128],
+    pub xi: &'a [u64],
     /// Input alpha plane `m`.
-    pub ai: &'a [u128],
+    pub ai: &'a [u64],
     /// Line buffer: horizontal colour sums (saturated).
-    pub hx: &'a [u128],
+    pub hx: &'a [u64],
     /// Line buffer: horizontal alpha sums.
-    pub ha: &'a [u128],
+    pub ha: &'a [u64],
 }
 
 /// One output row's exact vertical sums over the columns whose window is not uniform.
@@ -133,8 +133,8 @@ impl RowSums {
     fn fill(
         &mut self,
         c: &[u64],
-        hx: &[u128],
-        ha: &[u128],
+        hx: &[u64],
+        ha: &[u64],
         dim: (usize, usize),
         y: usize,
         uniform: &[bool],
@@ -180,6 +180,46 @@ impl RowSums {
             (self.wide.0[x], self.wide.1[x])
         } else {
             (self.narrow.0[x] as u128, self.narrow.1[x] as u128)
+        }
+    }
+}
+
+/// A layer's planes over its box, kept between layers (one allocation for the largest box):
+/// the input colour `x * m`, alpha `m` and value, the full-share flags, the uniform windows
+/// and the line buffer.
+#[derive(Default)]
+struct Scratch {
+    xi: Vec<u64>,
+    ai: Vec<u64>,
+    val: Vec<u32>,
+    full: Vec<bool>,
+    win: uniform::Windows,
+    hx: Vec<u64>,
+    ha: Vec<u64>,
+}
+
+impl Scratch {
+    /// Layer `l`'s input planes over the box `(x0, y0, bw, bh)`.
+    fn input(
+        &mut self,
+        img: &DepthImage<u32>,
+        plan: &LayerPlan,
+        l: usize,
+        (x0, y0, bw, bh): (usize, usize, usize, usize),
+    ) {
+        self.xi.clear();
+        self.ai.clear();
+        self.val.clear();
+        for y in y0..y0 + bh {
+            let r = y * img.width + x0..y * img.width + x0 + bw;
+            let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
+            let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
+            for x in 0..bw {
+                let s = share(plan, key[x], cov[x], idx[x], l, img.n2);
+                self.xi.push(u64::from(value[x]) * u64::from(s));
+                self.ai.push(u64::from(s));
+                self.val.push(value[x]);
+            }
         }
     }
 }
@@ -255,8 +295,9 @@ pub fn layered_fixed_exec(
     let mut out = vec![0u128; w * h];
     let mut def = vec![false; w * h];
     let one_q = 1u128 << q;
-    let n2 = img.n2 as u128;
+    let n2 = u64::from(img.n2);
     let boxes = layer_boxes(w, h, plan);
+    let mut s = Scratch::default();
     for (l, layer) in plan.layers.iter().enumerate() {
         let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
@@ -265,24 +306,15 @@ pub fn layered_fixed_exec(
         let c = &layer.coef;
         let wx = border_sums(c, w);
         let wy = border_sums(c, h);
-        // Input planes over the box.
-        let mut xi = vec![0u128; bw * bh];
-        let mut ai = vec![0u128; bw * bh];
-        let mut val = vec![0u64; bw * bh];
-        for y in 0..bh {
-            for x in 0..bw {
-                let pi = (y + y0) * w + x + x0;
-                let s = share(plan, img.key[pi], img.cov[pi], plan.index[pi], l, img.n2);
-                xi[y * bw + x] = img.value[pi] as u128 * s as u128;
-                ai[y * bw + x] = s as u128;
-                val[y * bw + x] = img.value[pi] as u64;
-            }
-        }
+        // Input planes over the box: `x * m` and `m` fit u64 (a u32 code times a share of
+        // at most n2 samples).
+        s.input(img, plan, l, (x0, y0, bw, bh));
+        let (xi, ai, val) = (&s.xi[..], &s.ai[..], &s.val[..]);
         if layer.m == 0 {
             // sigma = 0: the mask is the identity; pass through.
             for y in 0..bh {
                 for x in 0..bw {
-                    let (a, v) = (ai[y * bw + x], xi[y * bw + x]);
+                    let (a, v) = (ai[y * bw + x] as u128, xi[y * bw + x] as u128);
                     if a == 0 {
                         continue;
                     }
@@ -299,14 +331,15 @@ pub fn layered_fixed_exec(
         // Uniform windows (docs/dof.md): exact without MACs where, besides the window being
         // uniform, neither word saturates and the box's tap sums are the image's.
         let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
-        let full: Vec<bool> = ai.iter().map(|&a| a == n2).collect();
-        let win = uniform::windows(bw, bh, layer.m, &full, &val);
-        let mut u = win.u;
+        s.full.clear();
+        s.full.extend(ai.iter().map(|&a| a == n2));
+        s.win.compute(bw, bh, layer.m, &s.full, val);
+        let u = &mut s.win.u;
         for y in 0..bh {
             for x in 0..bw {
                 let i = y * bw + x;
                 if u[i] {
-                    let hxv = xi[i] * bsx[x] as u128;
+                    let hxv = xi[i] as u128 * bsx[x] as u128;
                     u[i] = hxv <= line_max
                         && hxv * bsy[y] as u128 <= acc_max
                         && bsx[x] == wx[x + x0]
@@ -314,9 +347,10 @@ pub fn layered_fixed_exec(
                 }
             }
         }
+        let (u, hu) = (&s.win.u[..], &s.win.hu[..]);
         // The hardware option: 16x16 tiles of uniform pixels skip both passes.
         let tile_skip = if p.skip_uniform_tiles {
-            let (tiles, mask) = uniform::skipped_tiles(&u, (x0, y0, bw, bh));
+            let (tiles, mask) = uniform::skipped_tiles(u, (x0, y0, bw, bh));
             work.skipped_tiles += tiles;
             skipped[l] = mask.iter().filter(|&&b| b).count() as u64;
             Some(mask)
@@ -324,24 +358,25 @@ pub fn layered_fixed_exec(
             None
         };
         let active = (bw * bh) as u64 - skipped[l];
-        let hu = match exec {
-            Exec::Full => None,
-            Exec::SkipUniform => Some(&win.hu[..]),
-        };
-        // Horizontal pass into the line buffer.
-        let mut hx = vec![0u128; bw * bh];
-        let mut ha = vec![0u128; bw * bh];
-        let wide_h = !fast::fits_u64(xi.iter().copied().max().unwrap_or(0).max(n2), p.coef_bits);
+        // Horizontal pass into the line buffer: a saturated sum fits u64 (`line_bits` <= 64)
+        // and so does an alpha sum (taps of at most 2^20 times n2).
+        let (hx, ha) = (&mut s.hx, &mut s.ha);
+        hx.clear();
+        ha.clear();
+        let xmax = xi.iter().copied().max().unwrap_or(0).max(n2);
+        let wide_h = !fast::fits_u64(xmax as u128, p.coef_bits);
         for y in 0..bh {
             let (rx, ra) = (&xi[y * bw..(y + 1) * bw], &ai[y * bw..(y + 1) * bw]);
             for x in 0..bw {
                 let i = y * bw + x;
-                let r = match hu {
-                    None => row_mac(c, x, bw, line_max, |i| (rx[i], ra[i])),
-                    Some(hu) if hu[i] => {
-                        fast::mac_out(rx[x] * bsx[x] as u128, ra[x] * bsx[x] as u128, line_max)
-                    }
-                    Some(_) => {
+                let r = match exec {
+                    Exec::Full => row_mac(c, x, bw, line_max, |i| (rx[i] as u128, ra[i] as u128)),
+                    Exec::SkipUniform if hu[i] => fast::mac_out(
+                        rx[x] as u128 * bsx[x] as u128,
+                        ra[x] as u128 * bsx[x] as u128,
+                        line_max,
+                    ),
+                    Exec::SkipUniform => {
                         let (sx, sa) = if wide_h {
                             fast::hsum::<u128>(c, rx, ra, x)
                         } else {
@@ -356,10 +391,11 @@ pub fn layered_fixed_exec(
                         return Err(("dof.line".into(), p.line_bits));
                     }
                 }
-                hx[i] = r.x;
-                ha[i] = r.a;
+                hx.push(r.x as u64);
+                ha.push(r.a as u64);
             }
         }
+        let (hx, ha) = (&hx[..], &ha[..]);
         work.macs += 2 * c.len() as u64 * active;
         observe(&LayerPlanes {
             layer: l,
@@ -367,19 +403,19 @@ pub fn layered_fixed_exec(
             y0,
             bw,
             bh,
-            xi: &xi,
-            ai: &ai,
-            hx: &hx,
-            ha: &ha,
+            xi,
+            ai,
+            hx,
+            ha,
         });
         // Vertical pass, colour, alpha, composite.
-        let hmax = hx.iter().chain(&ha).copied().max().unwrap_or(0);
-        let wide_v = !fast::fits_u64(hmax, p.coef_bits);
+        let hmax = hx.iter().chain(ha).copied().max().unwrap_or(0);
+        let wide_v = !fast::fits_u64(hmax as u128, p.coef_bits);
         let mut rows = RowSums::new(bw, wide_v);
         for y in 0..bh {
             let ur = &u[y * bw..(y + 1) * bw];
             if exec == Exec::SkipUniform {
-                rows.fill(c, &hx, &ha, (bw, bh), y, ur);
+                rows.fill(c, hx, ha, (bw, bh), y, ur);
             }
             for x in 0..bw {
                 let i = y * bw + x;
@@ -403,7 +439,9 @@ pub fn layered_fixed_exec(
                     continue;
                 }
                 let r = match exec {
-                    Exec::Full => row_mac(c, y, bh, acc_max, |i| (hx[i * bw + x], ha[i * bw + x])),
+                    Exec::Full => row_mac(c, y, bh, acc_max, |i| {
+                        (hx[i * bw + x] as u128, ha[i * bw + x] as u128)
+                    }),
                     Exec::SkipUniform => {
                         let (sx, sa) = rows.get(x);
                         fast::mac_out(sx, sa, acc_max)

@@ -119,10 +119,12 @@ pub fn plan_layers(
             ));
         }
     }
+    let zq = lens.z_quantizer();
     let mid_sigma = |far: u32, near: u32| {
         let zm = (lens.z_of(far) + lens.z_of(near)) / 2.0;
-        // The middle depth as a code (the background's z_inf is exact): sigma from its code.
-        let code = lens.z_code(zm);
+        // The middle depth as a code (the background's z_inf is exact): sigma from its code
+        // (`lens.z_code`, its quantiser built once).
+        let code = zq.quantize_f64(zm).code;
         let c = if code >= i64::from(u32::MAX) {
             u32::MAX
         } else {
@@ -138,18 +140,26 @@ pub fn plan_layers(
         let far = keys[i];
         let s_far = sig(far);
         let mut j = i;
+        // Neighbouring depth codes mostly share their sigma codes: the test depends only on
+        // (sigma far, sigma near, sigma middle), so a repeat of the last accepted pair is
+        // accepted without looking the differences up.
+        let mut accepted: Option<(u64, u64)> = None;
         while j + 1 < keys.len() {
             let near = keys[j + 1];
             let s_near = sig(near);
             let (_, s_mid) = mid_sigma(far, near);
-            let mut ok = mask_difference(s_far, s_near, p.k) < p.p
-                && mask_difference(s_mid, s_far, p.k) < p.p
-                && mask_difference(s_mid, s_near, p.k) < p.p;
-            if ok && (s_far.signum() * s_near.signum() < 0.0) {
-                ok = mask_difference(s_mid, 0.0, p.k) < p.p;
-            }
-            if !ok {
-                break;
+            let pair = (s_near.to_bits(), s_mid.to_bits());
+            if accepted != Some(pair) {
+                let mut ok = mask_difference(s_far, s_near, p.k) < p.p
+                    && mask_difference(s_mid, s_far, p.k) < p.p
+                    && mask_difference(s_mid, s_near, p.k) < p.p;
+                if ok && (s_far.signum() * s_near.signum() < 0.0) {
+                    ok = mask_difference(s_mid, 0.0, p.k) < p.p;
+                }
+                if !ok {
+                    break;
+                }
+                accepted = Some(pair);
             }
             j += 1;
         }
@@ -182,7 +192,17 @@ pub fn plan_layers(
         // layers are ordered by descending key ranges
         layers.partition_point(|l| l.key_near > k)
     };
-    let index: Vec<u16> = key.iter().map(|&k| find(k) as u16).collect();
+    // Runs of one depth code are common: the layer is searched once per run.
+    let mut last = (u32::MAX, find(u32::MAX) as u16);
+    let index: Vec<u16> = key
+        .iter()
+        .map(|&k| {
+            if k != last.0 {
+                last = (k, find(k) as u16);
+            }
+            last.1
+        })
+        .collect();
     for &l in &index {
         layers[l as usize].pixels += 1;
     }

@@ -201,8 +201,12 @@ impl Stage for Dof {
         );
         facts.note("object_coc_max_px", coc_max);
         facts.note("object_pixels_in_focus", in_focus);
-        let mut next = frame.clone();
-        next.acc = out;
+        let next = Frame {
+            acc: out,
+            depth: frame.depth.clone(),
+            coverage: frame.coverage.clone(),
+            ..*frame
+        };
         taps.fixed.frame = Some(Arc::new(FrameTap {
             frame: next,
             coding: FrameCoding::Linear,
