@@ -101,7 +101,7 @@ fn row_loop(x: &[u32], thr: &[u32], s: u32, omax: u32, out: &mut [u32]) -> u64 {
 
 /// The run-time AVX2 build of [`row_loop`] (the binary still runs on any x86-64): the
 /// unsigned compare and minimum are single instructions there, which makes the dither pass
-/// about three times as fast as the portable SSE2 build (docs/dither.md).
+/// 2.4-3 times as fast as the portable SSE2 build on the development machine (docs/dither.md).
 #[cfg(target_arch = "x86_64")]
 mod simd {
     /// Whether the CPU has AVX2 (the standard library caches the answer).
