@@ -3,15 +3,16 @@
 //!
 //! `lut/...` and `lut+...` run the stages' own kernels (the gamma stage's block lookup, the
 //! dither stage's [`Dither::apply`]); `serial/...` the same kernels on one thread;
-//! `per_value/...` the straightforward per-pixel form the kernels replaced (kept here as the
-//! before-figure). After criterion, the ratios to the copy are printed from one interleaved
+//! `portable/...` the same serial kernels in their baseline x86-64 build (without the AVX2
+//! build the kernels pick at run time when the CPU has it); `per_value/...` the
+//! straightforward per-pixel form the kernels replaced (kept here as the before-figure). After criterion, the ratios to the copy are printed from one interleaved
 //! run (best of several rounds each; the machine is shared and noisy).
 
 use criterion::{Criterion, criterion_group};
 use igemu::config::{DitherCfg, DitherKind};
 use igemu::fixed::Quant;
-use igemu::stage::dither::{Dither, Mask, ordered_code};
-use igemu::stage::gamma::{GammaSpec, extended_lut, lookup, lookup_block};
+use igemu::stage::dither::{Dither, Mask, apply_ordered_portable, ordered_code};
+use igemu::stage::gamma::{GammaSpec, extended_lut, lookup, lookup_block, lookup_block_portable};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -57,6 +58,13 @@ fn per_value(d: &Data, m: &Mask, x: &mut [u32], out: &mut [u32]) -> u64 {
     sat
 }
 
+/// The serial kernels in their portable build: the block lookup, then the row-wise Bayer 8x8
+/// dither (frame 0, as [`Dither::apply_serial`] runs it).
+fn portable(d: &Data, m: &Mask, x: &mut [u32], out: &mut [u32]) -> u64 {
+    lookup_block_portable(&d.lut, black_box(&d.acc), 0, x);
+    apply_ordered_portable(x, W, F, 255, m, 0, out)
+}
+
 fn bench(c: &mut Criterion) {
     let d = data();
     let mut x = vec![0u32; d.acc.len()];
@@ -94,6 +102,9 @@ fn bench(c: &mut Criterion) {
         });
     }
     let m = Mask::bayer(8);
+    g.bench_function("portable/lut+bayer8", |b| {
+        b.iter(|| portable(&d, &m, &mut x, &mut out))
+    });
     g.bench_function("per_value/lut+bayer8", |b| {
         b.iter(|| per_value(&d, &m, &mut x, &mut out))
     });
@@ -122,8 +133,9 @@ fn ratios() {
                 .expect("thread pool")
         })
         .collect();
-    // [copy, lut, lut+bayer8, per_value] on the caller, then [copy, lut, lut+bayer8] per pool.
-    let mut best = [f64::INFINITY; 10];
+    // [copy, lut, lut+bayer8, per_value] on the caller, then [copy, lut, lut+bayer8] per pool,
+    // then [lut, lut+bayer8] portable on the caller.
+    let mut best = [f64::INFINITY; 12];
     let mut time = |i: usize, f: &mut dyn FnMut()| {
         let t = Instant::now();
         f();
@@ -140,6 +152,12 @@ fn ratios() {
         });
         time(3, &mut || {
             black_box(per_value(&d, &m, &mut x, &mut out));
+        });
+        time(10, &mut || {
+            lookup_block_portable(&d.lut, black_box(&d.acc), 0, &mut x)
+        });
+        time(11, &mut || {
+            black_box(portable(&d, &m, &mut x, &mut out));
         });
         for (k, pool) in pools.iter().enumerate() {
             pool.install(|| {
@@ -166,6 +184,8 @@ fn ratios() {
     line("copy/u32 (caller)", best[0], best[0]);
     line("serial/lut/12to8.4 (caller)", best[1], best[0]);
     line("serial/lut+bayer8 (caller)", best[2], best[0]);
+    line("portable/lut/12to8.4 (caller)", best[10], best[0]);
+    line("portable/lut+bayer8 (caller)", best[11], best[0]);
     line("per_value/lut+bayer8 (caller)", best[3], best[0]);
     for (k, n) in ["1 thread", "2 threads"].iter().enumerate() {
         let copy = best[4 + 3 * k];

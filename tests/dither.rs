@@ -473,7 +473,9 @@ mod kernels {
     use igemu::fixed::SignalStats;
     use igemu::scene::Scene;
     use igemu::stage::StageId;
-    use igemu::stage::dither::{apply_ordered, apply_ordered_f64, apply_ordered_serial};
+    use igemu::stage::dither::{
+        apply_ordered, apply_ordered_f64, apply_ordered_portable, apply_ordered_serial,
+    };
     use proptest::prelude::*;
     use std::sync::OnceLock;
 
@@ -607,6 +609,10 @@ mod kernels {
             let mut out = vec![7u32; len];
             prop_assert_eq!(apply_ordered_serial(&x, width, s, omax, m, frame, &mut out), sat);
             prop_assert_eq!(&out, &want);
+            // The portable build (the calls above take the AVX2 build where the CPU has it).
+            let mut out = vec![7u32; len];
+            prop_assert_eq!(apply_ordered_portable(&x, width, s, omax, m, frame, &mut out), sat);
+            prop_assert_eq!(&out, &want);
             // The float reference on the same values as reals, and on odd reals.
             let mut v: Vec<f64> = x.iter().map(|&c| c as f64 / (1u64 << s.min(31)) as f64).collect();
             for (i, e) in v.iter_mut().enumerate() {
@@ -650,20 +656,41 @@ mod kernels {
         }
     }
 
-    /// Frames larger than one parallel band (several bands, rows not a multiple of a band).
+    /// Frames larger than one parallel band (several bands, rows not a multiple of a band),
+    /// on 1, 2, 3 and 7 threads (one band per thread): the same codes and count on each, and
+    /// in the portable build.
     #[test]
     fn large_frames_match_over_several_bands() {
         let mut rng = Rng(99);
+        let pools: Vec<rayon::ThreadPool> = [1, 2, 3, 7]
+            .iter()
+            .map(|&n| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap()
+            })
+            .collect();
         for (mi, (w, h)) in [
             (0usize, (300u32, 701u32)),
             (3, (1021, 131)),
             (6, (64, 2000)),
+            (2, (640, 480)),
+            (4, (1, 70001)),
         ] {
             let m = &masks()[mi];
             let x: Vec<u32> = (0..w * h).map(|_| (rng.next_u64() % 4200) as u32).collect();
             let (want, sat) = reference(&x, w, 4, 255, m, 3);
+            for pool in &pools {
+                let mut out = vec![0u32; x.len()];
+                assert_eq!(
+                    pool.install(|| apply_ordered(&x, w, 4, 255, m, 3, &mut out)),
+                    sat
+                );
+                assert_eq!(out, want);
+            }
             let mut out = vec![0u32; x.len()];
-            assert_eq!(apply_ordered(&x, w, 4, 255, m, 3, &mut out), sat);
+            assert_eq!(apply_ordered_portable(&x, w, 4, 255, m, 3, &mut out), sat);
             assert_eq!(out, want);
             assert!(sat > 0);
         }

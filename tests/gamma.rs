@@ -64,7 +64,9 @@ mod kernel {
     use igemu::scene::Scene;
     use igemu::stage::RunOptions;
     use igemu::stage::StageId;
-    use igemu::stage::gamma::{BLOCK, GammaLut, GammaSpec, lookup, lookup_block};
+    use igemu::stage::gamma::{
+        BLOCK, GammaLut, GammaSpec, lookup, lookup_block, lookup_block_portable,
+    };
     use proptest::prelude::*;
 
     /// Per value: `table[min(a >> shift, len - 1)]` (entry 0 for shifts past the word).
@@ -109,6 +111,10 @@ mod kernel {
             let mut out = vec![1u32; len];
             lookup_block(&t32, &acc, shift, &mut out);
             prop_assert_eq!(&out, &want32);
+            // The portable build (the calls above take the AVX2 build where the CPU has it).
+            let mut out = vec![1u32; len];
+            lookup_block_portable(&t32, &acc, shift, &mut out);
+            prop_assert_eq!(&out, &want32);
             let want16 = reference(&t16, &acc, shift);
             let mut out = vec![1u32; len];
             lookup(&t16, &acc, shift, &mut out);
@@ -116,6 +122,33 @@ mod kernel {
             let mut o16 = vec![1u16; len];
             lookup(&t16, &acc, shift, &mut o16);
             prop_assert!(o16.iter().zip(&want16).all(|(&a, &b)| u32::from(a) == b));
+            let mut o16 = vec![1u16; len];
+            lookup_block_portable(&t16, &acc, shift, &mut o16);
+            prop_assert!(o16.iter().zip(&want16).all(|(&a, &b)| u32::from(a) == b));
+        }
+    }
+
+    /// A frame of several chunks on 1, 2, 3 and 7 threads (one chunk per thread), with
+    /// addresses past the table (clamped) and shifts 0 and 3: the same codes on each.
+    #[test]
+    fn the_same_codes_on_any_thread_count() {
+        let t: Vec<u32> = (0..4096u32)
+            .map(|i| i.wrapping_mul(2_654_435_761) >> 7)
+            .collect();
+        let acc: Vec<u32> = (0..5 * BLOCK as u32 + 333)
+            .map(|i| (i.wrapping_mul(2_246_822_519) >> 17) & 0x7fff)
+            .collect();
+        for shift in [0, 3] {
+            let want = reference(&t, &acc, shift);
+            for n in [1, 2, 3, 7] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap();
+                let mut out = vec![0u32; acc.len()];
+                pool.install(|| lookup(&t, &acc, shift, &mut out));
+                assert_eq!(out, want, "{n} threads, shift {shift}");
+            }
         }
     }
 

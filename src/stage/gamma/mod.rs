@@ -176,6 +176,6 @@ pub fn powers(frame_ref: &[f64], hw: &HwConfig, spec: &GammaSpec) -> Vec<f64> {
 mod kernel;
 mod luts;
 mod stage;
-pub use kernel::{BLOCK, lookup, lookup_block};
+pub use kernel::{BLOCK, lookup, lookup_block, lookup_block_portable};
 pub use luts::{extended_lut, reduced_lut};
 pub use stage::Gamma;
