@@ -363,8 +363,9 @@ pub fn layered_fixed_exec(
         let (hx, ha) = (&mut s.hx, &mut s.ha);
         hx.clear();
         ha.clear();
-        let xmax = xi.iter().copied().max().unwrap_or(0).max(n2);
-        let wide_h = !fast::fits_u64(xmax as u128, p.coef_bits);
+        // `x * m` is at most a u32 code times n2: a bound, not a scan.
+        let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
+        let mut hmax = 0u64;
         for y in 0..bh {
             let (rx, ra) = (&xi[y * bw..(y + 1) * bw], &ai[y * bw..(y + 1) * bw]);
             for x in 0..bw {
@@ -393,6 +394,7 @@ pub fn layered_fixed_exec(
                 }
                 hx.push(r.x as u64);
                 ha.push(r.a as u64);
+                hmax = hmax.max(r.x as u64).max(r.a as u64);
             }
         }
         let (hx, ha) = (&hx[..], &ha[..]);
@@ -409,7 +411,6 @@ pub fn layered_fixed_exec(
             ha,
         });
         // Vertical pass, colour, alpha, composite.
-        let hmax = hx.iter().chain(ha).copied().max().unwrap_or(0);
         let wide_v = !fast::fits_u64(hmax as u128, p.coef_bits);
         let mut rows = RowSums::new(bw, wide_v);
         for y in 0..bh {
