@@ -1,5 +1,6 @@
 //! The layered DoF's uniform-window skip (docs/dof.md, "Uniform windows"): the fast
-//! computation (`Exec::SkipUniform`, the default) against every tap computed (`Exec::Full`),
+//! computation (`Exec::SkipUniform`, and in strips of rows `Exec::Strips`, the default)
+//! against every tap computed (`Exec::Full`),
 //! fixed and float, bit for bit with the same work counts, on the embedded scenes, the depth
 //! ramp and random depth images; and the hardware option `dof.skip_uniform_tiles`.
 
@@ -8,7 +9,8 @@ use igemu::fixed::{Overflow, QFormat};
 use igemu::pipeline;
 use igemu::scene::Scene;
 use igemu::stage::dof::{
-    DepthImage, Exec, LayerPlan, LensMap, layered_f64_exec, layered_fixed_exec, plan_layers,
+    DepthImage, Exec, LayerPlan, LensMap, STRIP_ROWS, layered_f64_exec, layered_fixed_exec,
+    plan_layers,
 };
 use igemu::stage::{RunOptions, StageId};
 use proptest::prelude::*;
@@ -21,6 +23,10 @@ fn check(img: &DepthImage<u32>, plan: &LayerPlan, p: &DofCfg, fmt: QFormat) -> O
     let full = layered_fixed_exec(img, plan, p, fmt, Exec::Full, |_| {});
     let fast = layered_fixed_exec(img, plan, p, fmt, Exec::SkipUniform, |_| {});
     assert_eq!(full, fast, "fixed layered: skip vs full");
+    for rows in [16, STRIP_ROWS] {
+        let strips = layered_fixed_exec(img, plan, p, fmt, Exec::Strips(rows), |_| {});
+        assert_eq!(full, strips, "fixed layered: strips of {rows} rows vs full");
+    }
     let vf: Vec<f64> = img.value.iter().map(|&v| v as f64 * 0.37).collect();
     let fi = DepthImage {
         value: &vf[..],
@@ -161,7 +167,7 @@ proptest! {
     /// (saturation, ERROR) and the hardware option: the skip is exact.
     #[test]
     fn random_depth_images_skip_is_exact(
-        w in 1usize..70, h in 1usize..50, seed in any::<u64>(), b in 1usize..24,
+        w in 1usize..70, h in 1usize..100, seed in any::<u64>(), b in 1usize..24,
         narrow in 0u32..3, tiles in any::<bool>(),
     ) {
         let (v, k, c) = blocks(w, h, seed, b);

@@ -113,6 +113,7 @@ pub struct LayerPlanes<'a> {
 }
 
 /// One output row's exact vertical sums over the columns whose window is not uniform.
+#[derive(Default)]
 struct RowSums {
     narrow: (Vec<u64>, Vec<u64>),
     wide: (Vec<u128>, Vec<u128>),
@@ -120,12 +121,15 @@ struct RowSums {
 }
 
 impl RowSums {
-    fn new(bw: usize, is_wide: bool) -> Self {
-        let n = |k: bool| if k { bw } else { 0 };
-        Self {
-            narrow: (vec![0; n(!is_wide)], vec![0; n(!is_wide)]),
-            wide: (vec![0; n(is_wide)], vec![0; n(is_wide)]),
-            is_wide,
+    /// Sums of `bw` columns, in `u128` words when `is_wide`.
+    fn reset(&mut self, bw: usize, is_wide: bool) {
+        self.is_wide = is_wide;
+        if is_wide {
+            self.wide.0.resize(bw, 0);
+            self.wide.1.resize(bw, 0);
+        } else {
+            self.narrow.0.resize(bw, 0);
+            self.narrow.1.resize(bw, 0);
         }
     }
 
@@ -184,9 +188,9 @@ impl RowSums {
     }
 }
 
-/// A layer's planes over its box, kept between layers (one allocation for the largest box):
-/// the input colour `x * m`, alpha `m` and value, the full-share flags, the uniform windows
-/// and the line buffer.
+/// A layer's planes over a strip of its box, kept between strips and layers (one
+/// allocation for the largest): the input colour `x * m`, alpha `m` and value, the
+/// full-share flags, the uniform windows, the line buffer and one row's vertical sums.
 #[derive(Default)]
 struct Scratch {
     xi: Vec<u64>,
@@ -196,10 +200,11 @@ struct Scratch {
     win: uniform::Windows,
     hx: Vec<u64>,
     ha: Vec<u64>,
+    rows: RowSums,
 }
 
 impl Scratch {
-    /// Layer `l`'s input planes over the box `(x0, y0, bw, bh)`.
+    /// Layer `l`'s input planes over the rectangle `(x0, y0, bw, bh)`.
     fn input(
         &mut self,
         img: &DepthImage<u32>,
@@ -245,9 +250,21 @@ pub enum Exec {
     /// Every tap of both passes at every box pixel (the straightforward reference).
     Full,
     /// Uniform mask windows take their value without MACs, the vertical pass runs row by
-    /// row ([`super::fast`]): the default.
+    /// row ([`super::fast`]), over the whole layer box at once (the planes the HDL bench
+    /// observes).
     SkipUniform,
+    /// [`Exec::SkipUniform`] in strips of at least this many output rows (each with the `M`
+    /// rows above and below it that its vertical taps read), so the planes take a strip,
+    /// not the frame: the default ([`STRIP_ROWS`]). A strip is at least `8 M` rows (the
+    /// rows read twice stay a quarter at most) and starts at an image row that is a
+    /// multiple of its height, itself a multiple of 16, so the 16x16 tiles of
+    /// `dof.skip_uniform_tiles` never straddle two. With overflow ERROR a layer is one
+    /// strip (the first overflow stops the run, so the passes keep their whole-box order).
+    Strips(usize),
 }
+
+/// The stage's strip height ([`Exec::Strips`]).
+pub const STRIP_ROWS: usize = 128;
 
 /// The fixed-point layered DoF. Returns the output codes in `frame_fmt` (rounded with
 /// `p.quant`, saturated and counted in [`DofWork::out_overflows`]) and the work counts; `Err`
@@ -258,7 +275,8 @@ pub fn layered_fixed(
     p: &DofCfg,
     frame_fmt: QFormat,
 ) -> Result<(Vec<u32>, DofWork), (String, u32)> {
-    layered_fixed_observed(img, plan, p, frame_fmt, |_| {})
+    layered_fixed_exec(img, plan, p, frame_fmt, Exec::Strips(STRIP_ROWS), |_| {})
+        .map(|r| (r.0, r.1))
 }
 
 /// [`layered_fixed`], showing `observe` each blurred layer's planes after its horizontal
@@ -306,15 +324,12 @@ pub fn layered_fixed_exec(
         let c = &layer.coef;
         let wx = border_sums(c, w);
         let wy = border_sums(c, h);
-        // Input planes over the box: `x * m` and `m` fit u64 (a u32 code times a share of
-        // at most n2 samples).
-        s.input(img, plan, l, (x0, y0, bw, bh));
-        let (xi, ai, val) = (&s.xi[..], &s.ai[..], &s.val[..]);
         if layer.m == 0 {
             // sigma = 0: the mask is the identity; pass through.
+            s.input(img, plan, l, (x0, y0, bw, bh));
             for y in 0..bh {
                 for x in 0..bw {
-                    let (a, v) = (ai[y * bw + x] as u128, xi[y * bw + x] as u128);
+                    let (a, v) = (s.ai[y * bw + x] as u128, s.xi[y * bw + x] as u128);
                     if a == 0 {
                         continue;
                     }
@@ -328,148 +343,181 @@ pub fn layered_fixed_exec(
             }
             continue;
         }
-        // Uniform windows (docs/dof.md): exact without MACs where, besides the window being
-        // uniform, neither word saturates and the box's tap sums are the image's.
-        let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
-        s.full.clear();
-        s.full.extend(ai.iter().map(|&a| a == n2));
-        s.win.compute(bw, bh, layer.m, &s.full, val);
-        let u = &mut s.win.u;
-        for y in 0..bh {
-            for x in 0..bw {
-                let i = y * bw + x;
-                if u[i] {
-                    let hxv = xi[i] as u128 * bsx[x] as u128;
-                    u[i] = hxv <= line_max
-                        && hxv * bsy[y] as u128 <= acc_max
-                        && bsx[x] == wx[x + x0]
-                        && bsy[y] == wy[y + y0];
-                }
-            }
-        }
-        let (u, hu) = (&s.win.u[..], &s.win.hu[..]);
-        // The hardware option: 16x16 tiles of uniform pixels skip both passes.
-        let tile_skip = if p.skip_uniform_tiles {
-            let (tiles, mask) = uniform::skipped_tiles(u, (x0, y0, bw, bh));
-            work.skipped_tiles += tiles;
-            skipped[l] = mask.iter().filter(|&&b| b).count() as u64;
-            Some(mask)
-        } else {
-            None
+        let strip = match exec {
+            Exec::Strips(rows) if p.overflow != Overflow::Error => rows
+                .max(8 * layer.m)
+                .next_multiple_of(uniform::UNIFORM_TILE),
+            _ => usize::MAX,
         };
-        let active = (bw * bh) as u64 - skipped[l];
-        // Horizontal pass into the line buffer: a saturated sum fits u64 (`line_bits` <= 64)
-        // and so does an alpha sum (taps of at most 2^20 times n2).
-        let (hx, ha) = (&mut s.hx, &mut s.ha);
-        hx.clear();
-        ha.clear();
-        // `x * m` is at most a u32 code times n2: a bound, not a scan.
-        let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
-        let mut hmax = 0u64;
-        for y in 0..bh {
-            let (rx, ra) = (&xi[y * bw..(y + 1) * bw], &ai[y * bw..(y + 1) * bw]);
-            for x in 0..bw {
-                let i = y * bw + x;
-                let r = match exec {
-                    Exec::Full => row_mac(c, x, bw, line_max, |i| (rx[i] as u128, ra[i] as u128)),
-                    Exec::SkipUniform if hu[i] => fast::mac_out(
-                        rx[x] as u128 * bsx[x] as u128,
-                        ra[x] as u128 * bsx[x] as u128,
-                        line_max,
-                    ),
-                    Exec::SkipUniform => {
-                        let (sx, sa) = if wide_h {
-                            fast::hsum::<u128>(c, rx, ra, x)
-                        } else {
-                            fast::hsum::<u64>(c, rx, ra, x)
-                        };
-                        fast::mac_out(sx, sa, line_max)
-                    }
-                };
-                if r.overflow {
-                    work.line_overflows += 1;
-                    if p.overflow == Overflow::Error {
-                        return Err(("dof.line".into(), p.line_bits));
+        let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
+        // Output rows [r0, r1) of the box per strip; the planes cover [e0, e1), M more rows
+        // each side (clipped to the box), whose uniform windows and sums for [r0, r1) are
+        // those of the whole box (docs/dof.md, "Strips").
+        let mut r0 = 0;
+        while r0 < bh {
+            let r1 = if strip >= bh {
+                bh
+            } else {
+                ((y0 + r0) / strip * strip + strip - y0).min(bh)
+            };
+            let (e0, e1) = (r0.saturating_sub(layer.m), (r1 + layer.m).min(bh));
+            let eh = e1 - e0;
+            s.input(img, plan, l, (x0, y0 + e0, bw, eh));
+            let (xi, ai, val) = (&s.xi[..], &s.ai[..], &s.val[..]);
+            // Uniform windows (docs/dof.md): exact without MACs where, besides the window
+            // being uniform, neither word saturates and the box's tap sums are the image's.
+            s.full.clear();
+            s.full.extend(ai.iter().map(|&a| a == n2));
+            s.win.compute(bw, eh, layer.m, &s.full, val);
+            let u = &mut s.win.u;
+            for yy in 0..eh {
+                let y = e0 + yy;
+                for x in 0..bw {
+                    let i = yy * bw + x;
+                    if u[i] {
+                        let hxv = xi[i] as u128 * bsx[x] as u128;
+                        u[i] = hxv <= line_max
+                            && hxv * bsy[y] as u128 <= acc_max
+                            && bsx[x] == wx[x + x0]
+                            && bsy[y] == wy[y + y0];
                     }
                 }
-                hx.push(r.x as u64);
-                ha.push(r.a as u64);
-                hmax = hmax.max(r.x as u64).max(r.a as u64);
             }
-        }
-        let (hx, ha) = (&hx[..], &ha[..]);
-        work.macs += 2 * c.len() as u64 * active;
-        observe(&LayerPlanes {
-            layer: l,
-            x0,
-            y0,
-            bw,
-            bh,
-            xi,
-            ai,
-            hx,
-            ha,
-        });
-        // Vertical pass, colour, alpha, composite.
-        let wide_v = !fast::fits_u64(hmax as u128, p.coef_bits);
-        let mut rows = RowSums::new(bw, wide_v);
-        for y in 0..bh {
-            let ur = &u[y * bw..(y + 1) * bw];
-            if exec == Exec::SkipUniform {
-                rows.fill(c, hx, ha, (bw, bh), y, ur);
+            let (u, hu) = (&s.win.u[..], &s.win.hu[..]);
+            // The hardware option: 16x16 tiles of uniform pixels skip both passes.
+            let tile_skip = if p.skip_uniform_tiles {
+                let (tiles, mask) = uniform::skipped_tiles(
+                    &u[(r0 - e0) * bw..(r1 - e0) * bw],
+                    (x0, y0 + r0, bw, r1 - r0),
+                );
+                work.skipped_tiles += tiles;
+                skipped[l] += mask.iter().filter(|&&b| b).count() as u64;
+                Some(mask)
+            } else {
+                None
+            };
+            // Horizontal pass into the line buffer: a saturated sum fits u64
+            // (`line_bits` <= 64) and so does an alpha sum (taps of at most 2^20 times n2).
+            let (hx, ha) = (&mut s.hx, &mut s.ha);
+            hx.clear();
+            ha.clear();
+            // `x * m` is at most a u32 code times n2: a bound, not a scan.
+            let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
+            let mut hmax = 0u64;
+            for yy in 0..eh {
+                let (rx, ra) = (&xi[yy * bw..(yy + 1) * bw], &ai[yy * bw..(yy + 1) * bw]);
+                // Rows of the neighbouring strips are computed again, counted there.
+                let counted = (r0..r1).contains(&(e0 + yy));
+                for x in 0..bw {
+                    let i = yy * bw + x;
+                    let r = match exec {
+                        Exec::Full => {
+                            row_mac(c, x, bw, line_max, |i| (rx[i] as u128, ra[i] as u128))
+                        }
+                        _ if hu[i] => fast::mac_out(
+                            rx[x] as u128 * bsx[x] as u128,
+                            ra[x] as u128 * bsx[x] as u128,
+                            line_max,
+                        ),
+                        _ => {
+                            let (sx, sa) = if wide_h {
+                                fast::hsum::<u128>(c, rx, ra, x)
+                            } else {
+                                fast::hsum::<u64>(c, rx, ra, x)
+                            };
+                            fast::mac_out(sx, sa, line_max)
+                        }
+                    };
+                    if r.overflow && counted {
+                        work.line_overflows += 1;
+                        if p.overflow == Overflow::Error {
+                            return Err(("dof.line".into(), p.line_bits));
+                        }
+                    }
+                    hx.push(r.x as u64);
+                    ha.push(r.a as u64);
+                    hmax = hmax.max(r.x as u64).max(r.a as u64);
+                }
             }
-            for x in 0..bw {
-                let i = y * bw + x;
-                let pi = (y + y0) * w + x + x0;
-                let skip = tile_skip.as_ref().is_some_and(|t| t[i]);
-                if exec == Exec::SkipUniform && ur[x] {
-                    // Uniform window: colour v exactly, alpha one (docs/dof.md).
+            let (hx, ha) = (&hx[..], &ha[..]);
+            if strip >= bh {
+                observe(&LayerPlanes {
+                    layer: l,
+                    x0,
+                    y0,
+                    bw,
+                    bh,
+                    xi,
+                    ai,
+                    hx,
+                    ha,
+                });
+            }
+            // Vertical pass, colour, alpha, composite.
+            let wide_v = !fast::fits_u64(hmax as u128, p.coef_bits);
+            s.rows.reset(bw, wide_v);
+            for y in r0..r1 {
+                let yy = y - e0;
+                let ur = &u[yy * bw..(yy + 1) * bw];
+                if exec != Exec::Full {
+                    s.rows.fill(c, hx, ha, (bw, eh), yy, ur);
+                }
+                for x in 0..bw {
+                    let i = yy * bw + x;
+                    let pi = (y + y0) * w + x + x0;
+                    let skip = tile_skip.as_ref().is_some_and(|t| t[(y - r0) * bw + x]);
+                    if exec != Exec::Full && ur[x] {
+                        // Uniform window: colour v exactly, alpha one (docs/dof.md).
+                        if !skip {
+                            work.divides += 1;
+                        }
+                        composite(
+                            &mut out[pi],
+                            &mut def[pi],
+                            (val[i] as u128) << g,
+                            one_q,
+                            one_q,
+                            q,
+                            p.quant,
+                        );
+                        work.composites += 1;
+                        continue;
+                    }
+                    let r = match exec {
+                        Exec::Full => row_mac(c, yy, eh, acc_max, |i| {
+                            (hx[i * bw + x] as u128, ha[i * bw + x] as u128)
+                        }),
+                        _ => {
+                            let (sx, sa) = s.rows.get(x);
+                            fast::mac_out(sx, sa, acc_max)
+                        }
+                    };
+                    if r.overflow {
+                        work.acc_overflows += 1;
+                        if p.overflow == Overflow::Error {
+                            return Err(("dof.acc".into(), p.acc_bits));
+                        }
+                    }
+                    let (sx, sa) = (r.x, r.a);
+                    if sa == 0 {
+                        continue;
+                    }
                     if !skip {
                         work.divides += 1;
                     }
-                    composite(
-                        &mut out[pi],
-                        &mut def[pi],
-                        (val[i] as u128) << g,
-                        one_q,
-                        one_q,
-                        q,
-                        p.quant,
-                    );
+                    // colour = round(F 2^g / A): half-up integer divide
+                    let col = ((sx << (g + 1)) / sa).div_ceil(2);
+                    let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
+                    let aq = (((sa << (q + 1)) / ws).div_ceil(2)).min(one_q);
+                    composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
                     work.composites += 1;
-                    continue;
                 }
-                let r = match exec {
-                    Exec::Full => row_mac(c, y, bh, acc_max, |i| {
-                        (hx[i * bw + x] as u128, ha[i * bw + x] as u128)
-                    }),
-                    Exec::SkipUniform => {
-                        let (sx, sa) = rows.get(x);
-                        fast::mac_out(sx, sa, acc_max)
-                    }
-                };
-                if r.overflow {
-                    work.acc_overflows += 1;
-                    if p.overflow == Overflow::Error {
-                        return Err(("dof.acc".into(), p.acc_bits));
-                    }
-                }
-                let (sx, sa) = (r.x, r.a);
-                if sa == 0 {
-                    continue;
-                }
-                if !skip {
-                    work.divides += 1;
-                }
-                // colour = round(F 2^g / A): half-up integer divide
-                let col = ((sx << (g + 1)) / sa).div_ceil(2);
-                let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
-                let aq = (((sa << (q + 1)) / ws).div_ceil(2)).min(one_q);
-                composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
-                work.composites += 1;
             }
+            r0 = r1;
         }
-        work.macs += 2 * c.len() as u64 * active;
+        let active = (bw * bh) as u64 - skipped[l];
+        // Both passes, colour and alpha planes.
+        work.macs += 2 * 2 * c.len() as u64 * active;
     }
     // The composite carries `g` guard bits below the frame LSB.
     let frame_q = Quantizer::new(frame_fmt, p.quant, Overflow::Sat);
@@ -485,9 +533,12 @@ pub fn layered_fixed_exec(
     Ok((res, work, skipped))
 }
 
+/// `o = col` over `o` with alpha `aq / one`: `round((col aq + o (one - aq)) / one)`; the
+/// first layer at a pixel, or an opaque one (`aq = one`: the quotient is exact), writes
+/// `col`.
 #[inline]
 fn composite(o: &mut u128, d: &mut bool, col: u128, aq: u128, one: u128, q: u32, quant: Quant) {
-    if !*d {
+    if !*d || aq == one {
         *o = col;
         *d = true;
     } else {

@@ -99,7 +99,7 @@ pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> 
                 };
                 (pass(&pass(&xi, true), false), pass(&pass(&ai, true), false))
             }
-            Exec::SkipUniform => fast_passes(c, (bw, bh), &xi, &ai),
+            Exec::SkipUniform | Exec::Strips(_) => fast_passes(c, (bw, bh), &xi, &ai),
         };
         for y in 0..bh {
             for x in 0..bw {

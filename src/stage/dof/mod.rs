@@ -109,8 +109,8 @@ pub use cost::{
     overflow_signal, overflow_signal_in, sigma_rom_image,
 };
 pub use fixed::{
-    DofWork, Exec, FixedRun, LayerPlanes, MacOut, border_sum, layered_fixed, layered_fixed_exec,
-    layered_fixed_observed, row_mac,
+    DofWork, Exec, FixedRun, LayerPlanes, MacOut, STRIP_ROWS, border_sum, layered_fixed,
+    layered_fixed_exec, layered_fixed_observed, row_mac,
 };
 pub use float::{layered_f64, layered_f64_exec};
 pub use layers::{DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layers};
