@@ -63,10 +63,38 @@ fn fragments(p: &Primitive, n: f64, region_samples: f64) -> f64 {
     }
 }
 
+/// Bytes per sample of the sample buffers: fixed (12 B) and float (20 B), the stage-local
+/// float shadow, the log stage's re-coded copies.
+fn per_sample(plan: &Plan, opts: RunOptions) -> f64 {
+    let mut per_sample = 12.0 + 20.0;
+    if opts.stage_local {
+        per_sample += 20.0;
+    }
+    if plan.layout.has(StageId::Logdomain) {
+        per_sample += 24.0;
+    }
+    per_sample
+}
+
+/// The sample side of a whole-region run: the sample buffers' and the fragment lists'
+/// bytes (what a banded run divides into bands; see `super::bands`).
+pub fn sample_side(plan: &Plan, host: &HostScene, opts: RunOptions) -> (f64, f64) {
+    let l = &plan.layout;
+    let region_samples = l.samples.len() as f64;
+    let frags: f64 = host
+        .prims
+        .iter()
+        .map(|p| fragments(p, l.grid.n as f64, region_samples))
+        .sum();
+    (
+        region_samples * per_sample(plan, opts),
+        frags * (12.0 + 24.0),
+    )
+}
+
 /// Estimates the memory a run of `plan` needs.
 pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
     let l = &plan.layout;
-    let region_samples = l.samples.len() as f64;
     let pixels = l.grid.pixels();
     let mut parts = Vec::new();
     let mut part = |what, bytes: f64, drivers| {
@@ -76,30 +104,50 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
             drivers,
         })
     };
-    // Fixed (12 B) and float (20 B) sample buffers, the stage-local float shadow, the log
-    // stage's re-coded copies.
-    let mut per_sample = 12.0 + 20.0;
-    if opts.stage_local {
-        per_sample += 20.0;
+    let frags: f64;
+    match super::bands::rows(plan, opts) {
+        None => {
+            let (buffers, f) = sample_side(plan, host, opts);
+            frags = f / (12.0 + 24.0);
+            part(
+                "sample buffers",
+                buffers,
+                "the region the primitives touch (image.width x image.height) and raster.samples",
+            );
+            part(
+                "fragments",
+                f,
+                "the primitives' screen area with overdraw and raster.samples",
+            );
+        }
+        Some(rows) => {
+            // One band at a time: its own sample rows (at most the band's rows and the
+            // filter's reach below them), and the accumulate input that adds the rows
+            // above them (fixed 12 B, float 20 B per sample, the stage-local f64 copy).
+            let n = l.grid.n as f64;
+            let reach =
+                (l.samples.height() as f64 - f64::from(l.region.y1 - l.region.y0) * n).max(0.0);
+            let band = l.samples.width() as f64 * (f64::from(rows) * n + reach);
+            let band = band.min(l.samples.len() as f64);
+            part(
+                "sample buffers (one band)",
+                band * (per_sample(plan, opts) + 12.0 + 20.0 + 8.0),
+                "the band's rows (the tile size, cycles.tile) x the region's width (image.width) and raster.samples",
+            );
+            // Each primitive emits at most two fragments per sample of the band (a line
+            // is two triangles).
+            frags = host
+                .prims
+                .iter()
+                .map(|p| fragments(p, n, l.samples.len() as f64).min(2.0 * band))
+                .sum();
+            part(
+                "fragments (one band)",
+                frags * (12.0 + 24.0),
+                "the primitives' screen area in one band with overdraw and raster.samples",
+            );
+        }
     }
-    if l.has(StageId::Logdomain) {
-        per_sample += 24.0;
-    }
-    part(
-        "sample buffers",
-        region_samples * per_sample,
-        "the region the primitives touch (image.width x image.height) and raster.samples",
-    );
-    let frags: f64 = host
-        .prims
-        .iter()
-        .map(|p| fragments(p, l.grid.n as f64, region_samples))
-        .sum();
-    part(
-        "fragments",
-        frags * (12.0 + 24.0),
-        "the primitives' screen area with overdraw and raster.samples",
-    );
     // Frame codes, depth and coverage (10 B) and the float frame (8 B), kept per stage tap;
     // gamma's codes and float values; the comparison's planes (luminance integrals, spans).
     let mut per_pixel = 2.0 * (10.0 + 8.0) + 4.0 + 16.0 + 4.0 + 120.0;
