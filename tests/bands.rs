@@ -260,3 +260,64 @@ proptest! {
         assert_same(&whole, &banded, &format!("seed {seed}, bands of {rows}"));
     }
 }
+
+/// The banded contour metric against its whole-image reference.
+fn contours_agree(
+    dac: &[u16],
+    dac_ref: &[u16],
+    powers: Vec<f64>,
+    d: &DisplayModel,
+    w: u32,
+    h: u32,
+) {
+    let whole = WholeIdeal::new(&powers, d, w, h);
+    let a = perceptual::contours_whole(dac, dac_ref, &whole, d);
+    let ideal = IdealImage::new(std::sync::Arc::new(powers), d, w, h);
+    let b = perceptual::contours(dac, dac_ref, &ideal, d);
+    assert_eq!(a.report, b.report);
+    assert!(a.map == b.map, "contour maps differ");
+}
+
+use igemu::compare::DisplayModel;
+use igemu::perceptual::{self, IdealImage, WholeIdeal};
+
+#[test]
+fn the_banded_contour_metric_equals_the_whole_image_one() {
+    for (name, bits) in [("default", 6), ("default-pinhole", 8), ("cone-focus", 10)] {
+        let s = Scene::embedded(name).unwrap();
+        let h = hw("linear12", |h| h.gamma.dac_bits = bits);
+        let r = render(&s, &h, RunOptions::FAST).unwrap();
+        let spec = igemu::pipeline::report::gamma_spec(&s, &h);
+        let powers = igemu::stage::gamma::powers(r.frame_ref(), &h, &spec);
+        let d = DisplayModel::new(&s.display, bits);
+        contours_agree(&r.dac, &r.dac_ref, powers, &d, 640, 480);
+        assert!(r.report.contours.smooth_steps > 0);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Random smooth ramps with noise and steps, on images of 1 to 150 rows (one to three
+    /// bands of the metric): the same steps, excesses and map.
+    #[test]
+    fn random_images_have_the_same_contours_banded(seed in any::<u64>(), w in 1u32..90, h in 1u32..150, bits in 4u32..9) {
+        let mut rng = Rng(seed | 1);
+        let (gx, gy) = (rng.range(-0.01, 0.01), rng.range(-0.01, 0.01));
+        let noise = rng.range(0.0, 0.02);
+        let max = ((1u32 << bits) - 1) as f64;
+        let mut powers = Vec::new();
+        let (mut dac, mut dac_ref) = (Vec::new(), Vec::new());
+        for y in 0..h {
+            for x in 0..w {
+                let v = (0.5 + gx * x as f64 + gy * y as f64 + noise * rng.range(-1.0, 1.0)).clamp(0.0, 1.0);
+                powers.push(v);
+                dac.push((v * max).floor() as u16);
+                dac_ref.push((v * max).round() as u16);
+            }
+        }
+        let s = Scene::default_scene();
+        let d = DisplayModel::new(&s.display, bits);
+        contours_agree(&dac, &dac_ref, powers, &d, w, h);
+    }
+}
