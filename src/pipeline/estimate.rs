@@ -92,6 +92,25 @@ pub fn sample_side(plan: &Plan, host: &HostScene, opts: RunOptions) -> (f64, f64
     )
 }
 
+/// A primitive's pixel bounding box `[x0, y0, x1, y1]` (lines and points with their
+/// width).
+fn bounds(p: &Primitive) -> [f64; 4] {
+    let (pts, r): (Vec<(f64, f64)>, f64) = match p {
+        Primitive::Triangle(v) => (v.iter().map(|v| (v.x, v.y)).collect(), 0.0),
+        Primitive::Line { a, b, width } => (vec![(a.x, a.y), (b.x, b.y)], width / 2.0),
+        Primitive::Point { v, size } => (vec![(v.x, v.y)], size / 2.0 + 1.0),
+    };
+    let f = |g: fn(f64, f64) -> f64, init: f64, xy: fn(&(f64, f64)) -> f64| {
+        pts.iter().map(xy).fold(init, g)
+    };
+    [
+        f(f64::min, f64::INFINITY, |p| p.0) - r,
+        f(f64::min, f64::INFINITY, |p| p.1) - r,
+        f(f64::max, f64::NEG_INFINITY, |p| p.0) + r,
+        f(f64::max, f64::NEG_INFINITY, |p| p.1) + r,
+    ]
+}
+
 /// Estimates the memory a run of `plan` needs.
 pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
     let l = &plan.layout;
@@ -104,11 +123,10 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
             drivers,
         })
     };
-    let frags: f64;
+    let all_frags = sample_side(plan, host, opts).1 / (12.0 + 24.0);
     match super::bands::rows(plan, opts) {
         None => {
             let (buffers, f) = sample_side(plan, host, opts);
-            frags = f / (12.0 + 24.0);
             part(
                 "sample buffers",
                 buffers,
@@ -134,13 +152,41 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
                 band * (per_sample(plan, opts) + 12.0 + 20.0 + 8.0),
                 "the band's rows (the tile size, cycles.tile) x the region's width (image.width) and raster.samples",
             );
-            // Each primitive emits at most two fragments per sample of the band (a line
-            // is two triangles).
-            frags = host
+            // The fragments of the band with the most: a primitive gives a band at most one
+            // fragment per sample of its bounding box's rows in the band (two for a line,
+            // which is two triangles), and at most its whole area.
+            let all: Vec<(f64, [f64; 4], f64)> = host
                 .prims
                 .iter()
-                .map(|p| fragments(p, n, l.samples.len() as f64).min(2.0 * band))
-                .sum();
+                .map(|p| {
+                    let per = if matches!(p, Primitive::Line { .. }) {
+                        2.0
+                    } else {
+                        1.0
+                    };
+                    (fragments(p, n, l.samples.len() as f64), bounds(p), per)
+                })
+                .collect();
+            let h = f64::from(l.grid.height);
+            let reach_px = reach / n;
+            let frags = (0..l.grid.height.div_ceil(rows))
+                .map(|b| {
+                    let (y0, y1) = (
+                        f64::from(b * rows) - reach_px,
+                        (f64::from((b + 1) * rows) + reach_px).min(h + reach_px),
+                    );
+                    all.iter()
+                        .map(|&(f, [x0, ya, x1, yb], per)| {
+                            let rows_in = (yb.min(y1) - ya.max(y0) + 2.0).max(0.0);
+                            if yb < y0 - 1.0 || ya > y1 + 1.0 {
+                                0.0
+                            } else {
+                                f.min(per * (x1 - x0 + 2.0) * n * rows_in * n)
+                            }
+                        })
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max);
             part(
                 "fragments (one band)",
                 frags * (12.0 + 24.0),
@@ -148,9 +194,17 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
             );
         }
     }
-    // Frame codes, depth and coverage (10 B) and the float frame (8 B), kept per stage tap;
-    // gamma's codes and float values; the comparison's planes (luminance integrals, spans).
-    let mut per_pixel = 2.0 * (10.0 + 8.0) + 4.0 + 16.0 + 4.0 + 120.0;
+    // Frame codes, depth and coverage (10 B) and the float frame (8 B), twice (a stage's
+    // result and its tap); gamma's codes and float codes (8 B) and the powers of the float
+    // frame (8 B, which the contour metric reads); the DAC codes fixed and float (4 B); the
+    // contour map (1 B) and the PNG (4 B). The contour metric's planes are one band of rows
+    // (`crate::perceptual`, about 100 B per pixel of 70 rows).
+    let mut per_pixel = 2.0 * (10.0 + 8.0) + 8.0 + 8.0 + 4.0 + 1.0 + 4.0;
+    part(
+        "contour metric (one band)",
+        70.0 * f64::from(l.grid.width) * 100.0,
+        "image.width",
+    );
     if l.has(StageId::Dof) {
         // The composite (16 B) and the widest layer's four u128 planes (64 B), fixed; the
         // float layers' planes (48 B) and the new frame (8 B); the stage-local copy.
@@ -172,7 +226,7 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
         let groups = f64::from(crate::truth::GROUPS);
         part(
             "depth-of-field truth",
-            batch * (l.grid.samples() as f64 * 20.0 + frags * 24.0)
+            batch * (l.grid.samples() as f64 * 20.0 + all_frags * 24.0)
                 + (groups + batch + 2.0) * pixels as f64 * 8.0,
             "--dof-truth: the threads, image.width x image.height and raster.samples",
         );
