@@ -339,6 +339,7 @@ fn join(tail: Option<&Tail>, read: i64, dk: i64, own: &SampleTap, own_f: &Sample
 /// outcome: work, signals, tokens, local errors and timings added up over the bands; the
 /// taps after raster and visibility without fragment lists and sample buffers (no stage
 /// keeps a whole-screen one); the whole frame and float frame after accumulate.
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     group: &[StageId],
     scene: &crate::scene::Scene,
