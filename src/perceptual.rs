@@ -158,7 +158,14 @@ pub struct IdealImage {
     b_min: f64,
     b_max: f64,
     gamma: f64,
+    /// The whole-image planes, built once for a screen of at most [`WHOLE_MAX`] pixels
+    /// (faster, and shared by every DAC width of a sweep).
+    whole: Option<WholeIdeal>,
 }
+
+/// Pixels up to which the contour metric keeps whole-image planes (about 90 bytes per
+/// pixel); a larger screen is measured band by band.
+pub const WHOLE_MAX: usize = 1 << 20;
 
 impl IdealImage {
     /// From the ideal values normalised to [0, 1] of full scale (`powers`: the float
@@ -169,6 +176,8 @@ impl IdealImage {
         width: u32,
         height: u32,
     ) -> Self {
+        let whole = (width as usize * height as usize <= WHOLE_MAX)
+            .then(|| WholeIdeal::new(&powers, display, width, height));
         Self {
             width: width as usize,
             height: height as usize,
@@ -176,6 +185,7 @@ impl IdealImage {
             b_min: display.b_min,
             b_max: display.b_max,
             gamma: display.gamma,
+            whole,
         }
     }
 
@@ -247,9 +257,24 @@ fn min_max(v: &[f64], p: usize, n: usize, stride: usize) -> (f64, f64) {
     m
 }
 
-/// Measures visible contours of `dac` (and of `dac_ref`) against the ideal image, band by
-/// band of rows (the same steps, excesses and map as [`contours_whole`], tested).
+/// Measures visible contours of `dac` (and of `dac_ref`) against the ideal image: on the
+/// whole-image planes for a screen of at most [`WHOLE_MAX`] pixels, else band by band of
+/// rows ([`contours_banded`]; the same result, tested).
 pub fn contours(
+    dac: &[u16],
+    dac_ref: &[u16],
+    ideal: &IdealImage,
+    display: &DisplayModel,
+) -> Contours {
+    match &ideal.whole {
+        Some(w) => contours_whole(dac, dac_ref, w, display),
+        None => contours_banded(dac, dac_ref, ideal, display),
+    }
+}
+
+/// [`contours`] band by band of rows (the same steps, excesses and map as
+/// [`contours_whole`], tested), holding a few rows of planes, not the screen's.
+pub fn contours_banded(
     dac: &[u16],
     dac_ref: &[u16],
     ideal: &IdealImage,

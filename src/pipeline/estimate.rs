@@ -197,14 +197,19 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
     // Frame codes, depth and coverage (10 B) and the float frame (8 B), twice (a stage's
     // result and its tap); gamma's codes and float codes (8 B) and the powers of the float
     // frame (8 B, which the contour metric reads); the DAC codes fixed and float (4 B); the
-    // contour map (1 B) and the PNG (4 B). The contour metric's planes are one band of rows
-    // (`crate::perceptual`, about 100 B per pixel of 70 rows).
+    // contour map (1 B) and the PNG (4 B). The contour metric's planes (`crate::perceptual`):
+    // whole-image up to `WHOLE_MAX` pixels (integral images, spans, excesses: 90 B), else
+    // one band of rows (about 100 B per pixel of 70 rows).
     let mut per_pixel = 2.0 * (10.0 + 8.0) + 8.0 + 8.0 + 4.0 + 1.0 + 4.0;
-    part(
-        "contour metric (one band)",
-        70.0 * f64::from(l.grid.width) * 100.0,
-        "image.width",
-    );
+    if pixels <= crate::perceptual::WHOLE_MAX as u64 {
+        per_pixel += 90.0;
+    } else {
+        part(
+            "contour metric (one band)",
+            70.0 * f64::from(l.grid.width) * 100.0,
+            "image.width",
+        );
+    }
     if l.has(StageId::Dof) {
         // The composite (16 B) and the widest layer's four u128 planes (64 B), fixed; the
         // float layers' planes (48 B) and the new frame (8 B); the stage-local copy.
