@@ -96,7 +96,7 @@ fn sliding_min_max(v: &[(f64, f64)], n: usize, stride: usize) -> Vec<(f64, f64)>
 /// smooth); `horizontal` pairs `(x, y)-(x+1, y)`.
 fn excess(
     so: [&[f64]; 2],
-    ideal: &IdealImage,
+    ideal: &WholeIdeal,
     max_code: f64,
     horizontal: bool,
 ) -> Vec<[Option<f64>; 2]> {
@@ -146,17 +146,270 @@ fn excess(
 }
 
 /// What the contour metric needs of the ideal (float reference, unquantised) image, none of
-/// it depending on the DAC width: the integral image of its displayed luminance and, per
-/// direction, the span (min, max) of its normalised value over every window. Built once per
-/// gamma exponent and shared by every DAC width and dither of a sweep.
+/// it depending on the DAC width: its normalised values (`powers`, shared with the gamma
+/// stage's float reference) and the display's luminance curve. Built once per gamma
+/// exponent and shared by every DAC width and dither of a sweep; [`contours`] derives the
+/// integral image and the windows' spans from it band by band of rows, so the metric holds
+/// a few rows of planes, not the screen's.
 pub struct IdealImage {
+    width: usize,
+    height: usize,
+    powers: std::sync::Arc<Vec<f64>>,
+    b_min: f64,
+    b_max: f64,
+    gamma: f64,
+    /// The whole-image planes, built once for a screen of at most [`WHOLE_MAX`] pixels
+    /// (faster, and shared by every DAC width of a sweep).
+    whole: Option<WholeIdeal>,
+}
+
+/// Pixels up to which the contour metric keeps whole-image planes (about 90 bytes per
+/// pixel); a larger screen is measured band by band.
+pub const WHOLE_MAX: usize = 1 << 20;
+
+impl IdealImage {
+    /// From the ideal values normalised to [0, 1] of full scale (`powers`: the float
+    /// frame through the gamma curve, before the DAC scale) on a `width x height` image.
+    pub fn new(
+        powers: std::sync::Arc<Vec<f64>>,
+        display: &DisplayModel,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let whole = (width as usize * height as usize <= WHOLE_MAX)
+            .then(|| WholeIdeal::new(&powers, display, width, height));
+        Self {
+            width: width as usize,
+            height: height as usize,
+            powers,
+            b_min: display.b_min,
+            b_max: display.b_max,
+            gamma: display.gamma,
+            whole,
+        }
+    }
+
+    /// Displayed luminance of pixel `i`.
+    #[inline]
+    fn lum(&self, i: usize) -> f64 {
+        self.b_min + (self.b_max - self.b_min) * self.powers[i].powf(self.gamma)
+    }
+}
+
+/// Rows `first..` of an integral image of width `w` (row `r` sums the pixel rows before
+/// `r`), computed row after row exactly as the whole-image one.
+struct Integral {
+    w: usize,
+    first: usize,
+    rows: Vec<f64>,
+}
+
+impl Integral {
+    fn new(w: usize) -> Self {
+        Self {
+            w,
+            first: 0,
+            rows: vec![0.0; w + 1],
+        }
+    }
+    fn last(&self) -> usize {
+        self.first + self.rows.len() / (self.w + 1) - 1
+    }
+    /// Keeps the rows from `lo` (at least the last) and computes them up to `hi`.
+    fn advance(&mut self, lo: usize, hi: usize, v: impl Fn(usize) -> f64) {
+        let w1 = self.w + 1;
+        let lo = lo.min(self.last());
+        if lo > self.first {
+            self.rows.drain(..(lo - self.first) * w1);
+            self.first = lo;
+        }
+        while self.last() < hi {
+            let y = self.last();
+            let up = self.rows.len() - w1;
+            self.rows.push(0.0);
+            let mut row = 0.0;
+            for x in 0..self.w {
+                row += v(y * self.w + x);
+                let s = self.rows[up + x + 1] + row;
+                self.rows.push(s);
+            }
+        }
+    }
+    /// Sum over `[x0, x1) x [y0, y1)` (as [`rect`]).
+    #[inline]
+    fn rect(&self, x0: usize, y0: usize, x1: usize, y1: usize) -> f64 {
+        let w1 = self.w + 1;
+        let at = |y: usize, x: usize| self.rows[(y - self.first) * w1 + x];
+        at(y1, x1) - at(y0, x1) - at(y1, x0) + at(y0, x0)
+    }
+}
+
+/// Pixel rows per band of the banded contour metric.
+const BAND: usize = 64;
+
+/// Minimum and maximum of `v` over `n` elements from `p` at `stride`.
+#[inline]
+fn min_max(v: &[f64], p: usize, n: usize, stride: usize) -> (f64, f64) {
+    let mut m = (f64::MAX, f64::MIN);
+    for &x in v[p..].iter().step_by(stride).take(n) {
+        m = (m.0.min(x), m.1.max(x));
+    }
+    m
+}
+
+/// Measures visible contours of `dac` (and of `dac_ref`) against the ideal image: on the
+/// whole-image planes for a screen of at most [`WHOLE_MAX`] pixels, else band by band of
+/// rows ([`contours_banded`]; the same result, tested).
+pub fn contours(
+    dac: &[u16],
+    dac_ref: &[u16],
+    ideal: &IdealImage,
+    display: &DisplayModel,
+) -> Contours {
+    match &ideal.whole {
+        Some(w) => contours_whole(dac, dac_ref, w, display),
+        None => contours_banded(dac, dac_ref, ideal, display),
+    }
+}
+
+/// [`contours`] band by band of rows (the same steps, excesses and map as
+/// [`contours_whole`], tested), holding a few rows of planes, not the screen's.
+pub fn contours_banded(
+    dac: &[u16],
+    dac_ref: &[u16],
+    ideal: &IdealImage,
+    display: &DisplayModel,
+) -> Contours {
+    let (w, h) = (ideal.width, ideal.height);
+    let (l, hw) = (SIDE, HALF_WIDTH);
+    let table = display.luminance_table();
+    let thr = 1.0 + display.weber;
+    let max_code = display.max_code;
+    let mut rep = ContourReport {
+        delta: display.weber,
+        window: [SIDE, 2 * HALF_WIDTH + 1],
+        smooth_max_codes: SMOOTH_CODES,
+        ..Default::default()
+    };
+    let mut map = vec![0u8; w * h];
+    let mut si = Integral::new(w);
+    let mut sf = Integral::new(w);
+    let mut sr = Integral::new(w);
+    let pw = &ideal.powers[..];
+    let mut y0 = 0;
+    while y0 < h {
+        let y1 = (y0 + BAND).min(h);
+        // Excesses of the band's rows and the rows either side (the local-maximum test).
+        let (e0, e1) = (y0.saturating_sub(1), (y1 + 1).min(h));
+        let lo = e0.saturating_sub(hw.max(l - 1));
+        let hi = (e1 + hw.max(l) + 1).min(h);
+        si.advance(lo, hi, |i| ideal.lum(i));
+        sf.advance(lo, hi, |i| table[dac[i] as usize]);
+        sr.advance(lo, hi, |i| table[dac_ref[i] as usize]);
+        let rows: Vec<[Vec<[Option<f64>; 2]>; 2]> = (e0..e1)
+            .into_par_iter()
+            .map(|y| {
+                [true, false].map(|horizontal| {
+                    (0..w)
+                        .map(|x| {
+                            let (a, b, na, nb) = if horizontal {
+                                (x, y, w, h)
+                            } else {
+                                (y, x, h, w)
+                            };
+                            if a + 1 < l || a + l >= na || b < hw || b + hw >= nb {
+                                return [None; 2];
+                            }
+                            let (a0, a1, a2) = (a + 1 - l, a + 1, a + 1 + l);
+                            let (b0, b1) = (b - hw, b + hw + 1);
+                            let r = |a0: usize, a1: usize| {
+                                if horizontal {
+                                    (a0, b0, a1, b1)
+                                } else {
+                                    (b0, a0, b1, a1)
+                                }
+                            };
+                            let (ra, rb) = (r(a0, a1), r(a1, a2));
+                            // The span over the 2L x (2W+1) window, along then across.
+                            let (along, across) = if horizontal { (1, w) } else { (w, 1) };
+                            let q = ra.1 * w + ra.0;
+                            let mut m = (f64::MAX, f64::MIN);
+                            for c in 0..2 * hw + 1 {
+                                let s = min_max(pw, q + c * across, 2 * l, along);
+                                m = (m.0.min(s.0), m.1.max(s.1));
+                            }
+                            let (lo, hi) = m;
+                            if hi * max_code - lo * max_code > SMOOTH_CODES {
+                                return [None; 2];
+                            }
+                            let ideal =
+                                si.rect(ra.0, ra.1, ra.2, ra.3) / si.rect(rb.0, rb.1, rb.2, rb.3);
+                            [&sf, &sr].map(|s| {
+                                let o =
+                                    s.rect(ra.0, ra.1, ra.2, ra.3) / s.rect(rb.0, rb.1, rb.2, rb.3);
+                                let q = o / ideal;
+                                Some(q.max(1.0 / q))
+                            })
+                        })
+                        .collect()
+                })
+            })
+            .collect();
+        for (d, horizontal) in [true, false].into_iter().enumerate() {
+            let ex = |x: usize, y: usize| -> &[Option<f64>; 2] { &rows[y - e0][d][x] };
+            let get = |x: Option<usize>, y: Option<usize>, k: usize| match (x, y) {
+                (Some(x), Some(y)) if x < w && y >= e0 && y < e1 => ex(x, y)[k],
+                _ => None,
+            };
+            for y in y0..y1 {
+                for x in 0..w {
+                    let e = ex(x, y);
+                    if e[0].is_none() {
+                        continue;
+                    }
+                    let p = y * w + x;
+                    rep.smooth_steps += 1;
+                    map[p] = map[p].max(1);
+                    let (prev, next) = if horizontal {
+                        ((x.checked_sub(1), Some(y)), (Some(x + 1), Some(y)))
+                    } else {
+                        ((Some(x), y.checked_sub(1)), (Some(x), Some(y + 1)))
+                    };
+                    for (k, v) in e.iter().enumerate() {
+                        let v = v.unwrap_or(1.0);
+                        if v > thr
+                            && get(prev.0, prev.1, k).is_none_or(|u| v >= u)
+                            && get(next.0, next.1, k).is_none_or(|u| v > u)
+                        {
+                            if k == 0 {
+                                rep.contour_steps += 1;
+                                map[p] = 2;
+                                map[if horizontal { p + 1 } else { p + w }] = 2;
+                            } else {
+                                rep.contour_steps_reference += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        y0 = y1;
+    }
+    rep.contour_pixels = map.iter().filter(|&&m| m == 2).count() as u64;
+    Contours { report: rep, map }
+}
+
+/// The whole-image form of the contour metric's inputs (the integral image of the ideal
+/// luminance and the spans of every window, 40 bytes per pixel plus 32 while it is built):
+/// the reference [`contours_whole`] is tested against.
+pub struct WholeIdeal {
     width: usize,
     height: usize,
     lum_integral: Vec<f64>,
     span: [Vec<(f64, f64)>; 2],
 }
 
-impl IdealImage {
+impl WholeIdeal {
     /// From the ideal values normalised to [0, 1] of full scale (`powers`: the float
     /// frame through the gamma curve, before the DAC scale) on a `width x height` image.
     pub fn new(powers: &[f64], display: &DisplayModel, width: u32, height: u32) -> Self {
@@ -182,11 +435,12 @@ impl IdealImage {
     }
 }
 
-/// Measures visible contours of `dac` (and of `dac_ref`) against the ideal image.
-pub fn contours(
+/// [`contours`] computed on whole-image planes (the reference of the banded form; about
+/// 90 bytes per pixel).
+pub fn contours_whole(
     dac: &[u16],
     dac_ref: &[u16],
-    ideal: &IdealImage,
+    ideal: &WholeIdeal,
     display: &DisplayModel,
 ) -> Contours {
     let (w, h) = (ideal.width, ideal.height);

@@ -63,10 +63,57 @@ fn fragments(p: &Primitive, n: f64, region_samples: f64) -> f64 {
     }
 }
 
+/// Bytes per sample of the sample buffers: fixed (12 B) and float (20 B), the stage-local
+/// float shadow, the log stage's re-coded copies.
+fn per_sample(plan: &Plan, opts: RunOptions) -> f64 {
+    let mut per_sample = 12.0 + 20.0;
+    if opts.stage_local {
+        per_sample += 20.0;
+    }
+    if plan.layout.has(StageId::Logdomain) {
+        per_sample += 24.0;
+    }
+    per_sample
+}
+
+/// The sample side of a whole-region run: the sample buffers' and the fragment lists'
+/// bytes (what a banded run divides into bands; see `super::bands`).
+pub fn sample_side(plan: &Plan, host: &HostScene, opts: RunOptions) -> (f64, f64) {
+    let l = &plan.layout;
+    let region_samples = l.samples.len() as f64;
+    let frags: f64 = host
+        .prims
+        .iter()
+        .map(|p| fragments(p, l.grid.n as f64, region_samples))
+        .sum();
+    (
+        region_samples * per_sample(plan, opts),
+        frags * (12.0 + 24.0),
+    )
+}
+
+/// A primitive's pixel bounding box `[x0, y0, x1, y1]` (lines and points with their
+/// width).
+fn bounds(p: &Primitive) -> [f64; 4] {
+    let (pts, r): (Vec<(f64, f64)>, f64) = match p {
+        Primitive::Triangle(v) => (v.iter().map(|v| (v.x, v.y)).collect(), 0.0),
+        Primitive::Line { a, b, width } => (vec![(a.x, a.y), (b.x, b.y)], width / 2.0),
+        Primitive::Point { v, size } => (vec![(v.x, v.y)], size / 2.0 + 1.0),
+    };
+    let f = |g: fn(f64, f64) -> f64, init: f64, xy: fn(&(f64, f64)) -> f64| {
+        pts.iter().map(xy).fold(init, g)
+    };
+    [
+        f(f64::min, f64::INFINITY, |p| p.0) - r,
+        f(f64::min, f64::INFINITY, |p| p.1) - r,
+        f(f64::max, f64::NEG_INFINITY, |p| p.0) + r,
+        f(f64::max, f64::NEG_INFINITY, |p| p.1) + r,
+    ]
+}
+
 /// Estimates the memory a run of `plan` needs.
 pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
     let l = &plan.layout;
-    let region_samples = l.samples.len() as f64;
     let pixels = l.grid.pixels();
     let mut parts = Vec::new();
     let mut part = |what, bytes: f64, drivers| {
@@ -76,33 +123,93 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
             drivers,
         })
     };
-    // Fixed (12 B) and float (20 B) sample buffers, the stage-local float shadow, the log
-    // stage's re-coded copies.
-    let mut per_sample = 12.0 + 20.0;
-    if opts.stage_local {
-        per_sample += 20.0;
+    let all_frags = sample_side(plan, host, opts).1 / (12.0 + 24.0);
+    match super::bands::rows(plan, opts) {
+        None => {
+            let (buffers, f) = sample_side(plan, host, opts);
+            part(
+                "sample buffers",
+                buffers,
+                "the region the primitives touch (image.width x image.height) and raster.samples",
+            );
+            part(
+                "fragments",
+                f,
+                "the primitives' screen area with overdraw and raster.samples",
+            );
+        }
+        Some(rows) => {
+            // One band at a time: its own sample rows (at most the band's rows and the
+            // filter's reach below them), and the accumulate input that adds the rows
+            // above them (fixed 12 B, float 20 B per sample, the stage-local f64 copy).
+            let n = l.grid.n as f64;
+            let reach =
+                (l.samples.height() as f64 - f64::from(l.region.y1 - l.region.y0) * n).max(0.0);
+            let band = l.samples.width() as f64 * (f64::from(rows) * n + reach);
+            let band = band.min(l.samples.len() as f64);
+            part(
+                "sample buffers (one band)",
+                band * (per_sample(plan, opts) + 12.0 + 20.0 + 8.0),
+                "the band's rows (the tile size, cycles.tile) x the region's width (image.width) and raster.samples",
+            );
+            // The fragments of the band with the most: a primitive gives a band at most one
+            // fragment per sample of its bounding box's rows in the band (two for a line,
+            // which is two triangles), and at most its whole area.
+            let all: Vec<(f64, [f64; 4], f64)> = host
+                .prims
+                .iter()
+                .map(|p| {
+                    let per = if matches!(p, Primitive::Line { .. }) {
+                        2.0
+                    } else {
+                        1.0
+                    };
+                    (fragments(p, n, l.samples.len() as f64), bounds(p), per)
+                })
+                .collect();
+            let h = f64::from(l.grid.height);
+            let reach_px = reach / n;
+            let frags = (0..l.grid.height.div_ceil(rows))
+                .map(|b| {
+                    let (y0, y1) = (
+                        f64::from(b * rows) - reach_px,
+                        (f64::from((b + 1) * rows) + reach_px).min(h + reach_px),
+                    );
+                    all.iter()
+                        .map(|&(f, [x0, ya, x1, yb], per)| {
+                            let rows_in = (yb.min(y1) - ya.max(y0) + 2.0).max(0.0);
+                            if yb < y0 - 1.0 || ya > y1 + 1.0 {
+                                0.0
+                            } else {
+                                f.min(per * (x1 - x0 + 2.0) * n * rows_in * n)
+                            }
+                        })
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max);
+            part(
+                "fragments (one band)",
+                frags * (12.0 + 24.0),
+                "the primitives' screen area in one band with overdraw and raster.samples",
+            );
+        }
     }
-    if l.has(StageId::Logdomain) {
-        per_sample += 24.0;
+    // Frame codes, depth and coverage (10 B) and the float frame (8 B), twice (a stage's
+    // result and its tap); gamma's codes and float codes (8 B) and the powers of the float
+    // frame (8 B, which the contour metric reads); the DAC codes fixed and float (4 B); the
+    // contour map (1 B) and the PNG (4 B). The contour metric's planes (`crate::perceptual`):
+    // whole-image up to `WHOLE_MAX` pixels (integral images, spans, excesses: 90 B), else
+    // one band of rows (about 100 B per pixel of 70 rows).
+    let mut per_pixel = 2.0 * (10.0 + 8.0) + 8.0 + 8.0 + 4.0 + 1.0 + 4.0;
+    if pixels <= crate::perceptual::WHOLE_MAX as u64 {
+        per_pixel += 90.0;
+    } else {
+        part(
+            "contour metric (one band)",
+            70.0 * f64::from(l.grid.width) * 100.0,
+            "image.width",
+        );
     }
-    part(
-        "sample buffers",
-        region_samples * per_sample,
-        "the region the primitives touch (image.width x image.height) and raster.samples",
-    );
-    let frags: f64 = host
-        .prims
-        .iter()
-        .map(|p| fragments(p, l.grid.n as f64, region_samples))
-        .sum();
-    part(
-        "fragments",
-        frags * (12.0 + 24.0),
-        "the primitives' screen area with overdraw and raster.samples",
-    );
-    // Frame codes, depth and coverage (10 B) and the float frame (8 B), kept per stage tap;
-    // gamma's codes and float values; the comparison's planes (luminance integrals, spans).
-    let mut per_pixel = 2.0 * (10.0 + 8.0) + 4.0 + 16.0 + 4.0 + 120.0;
     if l.has(StageId::Dof) {
         // The composite (16 B) and the widest layer's four u128 planes (64 B), fixed; the
         // float layers' planes (48 B) and the new frame (8 B); the stage-local copy.
@@ -124,7 +231,7 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
         let groups = f64::from(crate::truth::GROUPS);
         part(
             "depth-of-field truth",
-            batch * (l.grid.samples() as f64 * 20.0 + frags * 24.0)
+            batch * (l.grid.samples() as f64 * 20.0 + all_frags * 24.0)
                 + (groups + batch + 2.0) * pixels as f64 * 8.0,
             "--dof-truth: the threads, image.width x image.height and raster.samples",
         );

@@ -7,6 +7,7 @@
 //! the DAC codes end to end, and simulate the cycle model on the stages' tokens; on request
 //! compare both with the depth-of-field truth ([`truth`]).
 
+pub mod bands;
 pub mod cache;
 pub mod estimate;
 pub mod plan;

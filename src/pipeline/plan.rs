@@ -140,6 +140,7 @@ pub fn build(scene: &Scene, hw: &HwConfig) -> Result<Plan> {
             samples,
             tiles,
             order,
+            band: None,
         },
         host: Arc::new(host),
         host_ms,

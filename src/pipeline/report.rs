@@ -130,7 +130,12 @@ pub(super) fn ideal(scene: &Scene, hw: &HwConfig, steps: &[Step], cache: Option<
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let ik = Fnv::new().u64(pk).str("ideal image").finish();
     let ideal = memo(m, ik, || {
-        IdealImage::new(&powers, &display, scene.image.width, scene.image.height)
+        IdealImage::new(
+            powers.clone(),
+            &display,
+            scene.image.width,
+            scene.image.height,
+        )
     });
     Ideal { ideal }
 }

@@ -10,8 +10,8 @@ use crate::error::Result;
 use crate::fnv::Fnv;
 use crate::scene::Scene;
 use crate::stage::{
-    self, Cx, DynStage, MemImage, Memo, NoMemo, RunOptions, StageId, StageReport, Taps, Tokens,
-    ms_since,
+    self, AnyFixed, Cx, DynStage, MemImage, Memo, NoMemo, RunOptions, StageId, StageReport, Taps,
+    Tokens, ms_since,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -64,7 +64,11 @@ pub fn run(
     };
     let mut key = plan.key;
     let mut steps = Vec::with_capacity(plan.order().len());
-    for &id in plan.order() {
+    let band_rows = super::bands::rows(plan, opts);
+    let order = plan.order();
+    let mut at = 0;
+    while at < order.len() {
+        let id = order[at];
         let stage = stage::get(id);
         let cx = Cx {
             scene,
@@ -74,13 +78,44 @@ pub fn run(
             input_key: key,
             memo,
         };
-        let material = stage.key(&cx);
-        let k = Fnv::new()
-            .u64(key)
-            .str(id.name())
-            .str(&material.to_string())
-            .str(&serde_json::to_string(&opts).unwrap_or_default())
-            .finish();
+        let k = stage_key(stage, &cx, key, opts);
+        if let Some(rows) = band_rows.filter(|_| super::bands::is_banded(id)) {
+            // Raster, visibility and accumulate, band by band (see `bands`).
+            let group: Vec<StageId> = order[at..]
+                .iter()
+                .copied()
+                .take_while(|&s| super::bands::is_banded(s))
+                .collect();
+            if let Some(l) = last.filter(|l| group.contains(l) && *l != StageId::Accumulate) {
+                return Err(banded_tap(scene, l, rows));
+            }
+            let (mut ins, mut keys) = (vec![key], vec![k]);
+            for &g in &group[1..] {
+                let cx = Cx {
+                    input_key: keys[keys.len() - 1],
+                    ..cx
+                };
+                ins.push(cx.input_key);
+                keys.push(stage_key(stage::get(g), &cx, cx.input_key, opts));
+            }
+            let outs = super::bands::run(&group, scene, hw, plan, opts, memo, &ins, &taps, rows)?;
+            for ((&g, &gk), o) in group.iter().zip(&keys).zip(outs) {
+                taps = o.taps.clone();
+                key = gk;
+                steps.push(Step {
+                    id: g,
+                    key: gk,
+                    outcome: Arc::new(o),
+                    reused: false,
+                });
+            }
+            at += group.len();
+            if last.is_some_and(|l| group.contains(&l)) {
+                break;
+            }
+            continue;
+        }
+        at += 1;
         let (outcome, reused) = match cache {
             Some(c) => c.stage(k, || execute(stage, &cx, &taps))?,
             None => (Arc::new(execute(stage, &cx, &taps)?), false),
@@ -100,8 +135,41 @@ pub fn run(
     Ok(steps)
 }
 
+/// A stage's key: its key material chained with its input's key and the options.
+fn stage_key(stage: &dyn DynStage, cx: &Cx, input: u64, opts: RunOptions) -> u64 {
+    let material = stage.key(cx);
+    Fnv::new()
+        .u64(input)
+        .str(stage.id().name())
+        .str(&material.to_string())
+        .str(&serde_json::to_string(&opts).unwrap_or_default())
+        .finish()
+}
+
+/// The error of asking for the taps of a stage a banded run keeps no whole-screen taps of.
+fn banded_tap(scene: &Scene, id: StageId, rows: u32) -> crate::error::Error {
+    crate::error::Error::File(crate::error::FileError {
+        file: scene.name.clone(),
+        line: None,
+        col: None,
+        field: "image.width, image.height".into(),
+        msg: format!(
+            "this plan runs raster, visibility and accumulate in bands of {rows} pixel rows (the screen's sample buffers would not fit in memory at once): there is no whole-screen `{id}` tap; use a smaller screen"
+        ),
+    })
+}
+
 /// Runs one stage through the contract on the taps of its input.
 fn execute(stage: &dyn DynStage, cx: &Cx, input: &Taps) -> Result<Outcome> {
+    execute_keep(stage, cx, input).map(|o| o.0)
+}
+
+/// [`execute`], also returning the stage's private result.
+pub(super) fn execute_keep(
+    stage: &dyn DynStage,
+    cx: &Cx,
+    input: &Taps,
+) -> Result<(Outcome, AnyFixed)> {
     let mut taps = input.clone();
     let t = Instant::now();
     let (fixed, facts) = stage.fixed(cx, &mut taps)?;
@@ -136,11 +204,14 @@ fn execute(stage: &dyn DynStage, cx: &Cx, input: &Taps) -> Result<Outcome> {
         local,
         notes,
     };
-    Ok(Outcome {
-        taps,
-        report,
-        tokens,
-        packs,
-        images,
-    })
+    Ok((
+        Outcome {
+            taps,
+            report,
+            tokens,
+            packs,
+            images,
+        },
+        fixed,
+    ))
 }

@@ -44,6 +44,12 @@ pub struct RunOptions {
     /// is memoised under its own key.
     #[serde(skip)]
     pub dof_truth_samples: u32,
+    /// Run raster, visibility and accumulate in bands of this many pixel rows (rounded up
+    /// to the tile size; `None`: the plan decides from the sample-side memory, one band for
+    /// a small screen). The result is the same for any band height (tested); not part of
+    /// any stage's key.
+    #[serde(skip)]
+    pub band_rows: Option<u32>,
 }
 
 impl Default for RunOptions {
@@ -53,6 +59,7 @@ impl Default for RunOptions {
             dof_reference: false,
             max_memory: None,
             dof_truth_samples: 0,
+            band_rows: None,
         }
     }
 }
@@ -64,6 +71,7 @@ impl RunOptions {
         dof_reference: false,
         max_memory: None,
         dof_truth_samples: 0,
+        band_rows: None,
     };
 }
 

@@ -247,6 +247,22 @@ impl Tiles {
             .filter(|(_, r)| !r.is_empty())
     }
 
+    /// The tile rows of pixel rows `y0..y1` (`y0` a multiple of the tile size) as a tile map
+    /// of a `width x (y1 - y0)` screen: a band of a banded run, shifted to row 0.
+    pub fn band(&self, y0: u32, y1: u32) -> Tiles {
+        let rows = (y1 - y0).div_ceil(self.size);
+        let first = (y0 / self.size * self.cols) as usize;
+        let end = (first + (rows * self.cols) as usize).min(self.touched.len());
+        Tiles {
+            size: self.size,
+            cols: self.cols,
+            rows,
+            width: self.width,
+            height: y1 - y0,
+            touched: self.touched[first.min(end)..end].to_vec(),
+        }
+    }
+
     /// Marks every tile meeting the pixel box `b` (clipped to `region`).
     pub fn bin(&mut self, b: &Region, region: &Region) {
         self.bin_if(b, region, |_| true);
@@ -283,6 +299,29 @@ pub struct Layout {
     pub tiles: Tiles,
     /// The planned stages in run order.
     pub order: Vec<StageId>,
+    /// The band of pixel rows a banded run is computing (`None`: the whole screen at once).
+    /// See [`Band`].
+    pub band: Option<Band>,
+}
+
+/// One band of a banded run: the pipeline runs raster, visibility and accumulate band by
+/// band so that the sample buffers and fragment lists hold one band, not the screen.
+///
+/// Raster and visibility see the band's *own* sample rows in `Layout::samples` (the bands'
+/// own rows partition the plan's sample region, so every sample is rasterised and resolved
+/// once); the accumulate stage sees the band's pixel rows `y0..y1` shifted to row 0, with
+/// the sample rows their filter windows read (the rows before the band's own come from the
+/// band before), and writes a `width x (y1 - y0)` frame that the runner copies into the
+/// whole frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Band {
+    /// First pixel row of the band (a multiple of the tile size).
+    pub y0: u32,
+    /// One past its last pixel row.
+    pub y1: u32,
+    /// Whether this is the first band: it also counts the rows the raster walks above the
+    /// plan's sample region (every later band starts inside it).
+    pub first: bool,
 }
 
 impl Layout {

@@ -24,7 +24,7 @@ mod report;
 
 pub use crate::stage_id::StageId;
 pub use contract::{AnyFixed, Cx, DynStage, Memo, Need, NoMemo, RunOptions, Stage, memo};
-pub use layout::{Grid, Layout, Region, SampleRegion, Tiles};
+pub use layout::{Band, Grid, Layout, Region, SampleRegion, Tiles};
 pub use report::{
     Cost, Facts, LocalError, MemImage, MemKind, Memory, Notes, StageReport, TokenKind, Tokens,
     Unit, WeberCompare, ms_since, weber_of,

@@ -105,7 +105,7 @@ impl Stage for Accumulate {
         let hw = cx.hw;
         let k = kernel(hw);
         let s = taps.fixed.samples();
-        let size = (cx.layout.grid.width, cx.layout.grid.height);
+        let size = frame_size(cx.layout);
         let (frame, coding, tile_rmw, adder, facts) = match s.coding {
             SampleCoding::Linear => {
                 let ap = AccParams {
@@ -160,7 +160,7 @@ impl Stage for Accumulate {
 
     fn float(&self, cx: &Cx, a: &Accumulated, taps: &mut Taps, _: &mut Notes) -> Result<()> {
         let l = cx.layout;
-        let size = (l.grid.width, l.grid.height);
+        let size = frame_size(l);
         let frame_ref = float_frame(taps.float.samples(), &a.kernel, cx.hw, size, &l.region);
         taps.float.frame = Some(Arc::new(frame_ref));
         Ok(())
@@ -210,7 +210,7 @@ impl Stage for Accumulate {
             i_frac: cx.hw.input.intensity.format.frac_bits,
             frame_frac: cx.hw.accumulate.frame.format.frac_bits,
             bg_i: s.bg as f64,
-            size: (l.grid.width, l.grid.height),
+            size: frame_size(l),
         };
         let fl = accumulate_f64(&iv, &l.samples, &l.region, &pts, &r);
         let max = cx.hw.accumulate.frame.format.max_code() as f64;
@@ -256,17 +256,21 @@ impl Stage for Accumulate {
         }
     }
 
+    /// The frame memory (not on one band of a banded run: the runner packs the whole frame
+    /// once every band is in) and the weight ROM or the log adder's tables.
     fn memories(&self, cx: &Cx, a: &Accumulated, out: &Taps) -> Vec<MemImage> {
-        let tap = out.fixed.frame.clone().expect("accumulate wrote the frame");
-        let fb = frame_bits(cx.hw, a);
-        let frame = MemImage {
-            name: FRAME_MEMORY.into(),
-            fields: vec![fb],
-            words: tap.frame.acc.len(),
-            region_only: false,
-            get: Arc::new(move |w, _| tap.frame.acc[w] as u64),
-        };
-        let mut v = vec![frame];
+        let mut v = Vec::new();
+        if cx.layout.band.is_none() {
+            let tap = out.fixed.frame.clone().expect("accumulate wrote the frame");
+            let fb = frame_bits(cx.hw, a);
+            v.push(MemImage {
+                name: FRAME_MEMORY.into(),
+                fields: vec![fb],
+                words: tap.frame.acc.len(),
+                region_only: false,
+                get: Arc::new(move |w, _| tap.frame.acc[w] as u64),
+            });
+        }
         match &a.adder {
             Some(add) => v.extend(add.images()),
             None => {
@@ -275,6 +279,14 @@ impl Stage for Accumulate {
             }
         }
         v
+    }
+}
+
+/// The size of the frame the stage writes: the screen, or one band's rows of it.
+fn frame_size(l: &crate::stage::Layout) -> (u32, u32) {
+    match l.band {
+        Some(b) => (l.grid.width, b.y1 - b.y0),
+        None => (l.grid.width, l.grid.height),
     }
 }
 

@@ -84,11 +84,27 @@ pub fn raster_tri(
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
+    raster_tri_rows(t, p, reg, true, out, w);
+}
+
+/// [`raster_tri`] on one band of sample rows `reg.k0..reg.k1`: the edges are stepped (adds
+/// only, no samples) through the rows above the band, which count as `rows_walked`, and
+/// their re-seeds as `reseeds`, only when `above` (the first band, or the whole region);
+/// a later band's walk down to its rows repeats what an earlier band counted. The fragments
+/// of the band's rows are exactly those of the whole-region run (same walk, same adds).
+pub fn raster_tri_rows(
+    t: &TriSetup,
+    p: &RasterParams,
+    reg: &SampleRegion,
+    above: bool,
+    out: &mut Vec<Frag>,
+    w: &mut RasterWork,
+) {
     let g = &p.grid;
     let h2 = 2 * g.h;
     let (mut long, mut upper, mut lower) = (t.long, t.upper, t.lower);
     let (k_start, k_end) = (long.k0, long.k1.min(reg.k1));
-    if k_start >= k_end {
+    if k_start >= k_end || (!above && k_end <= reg.k0) {
         return;
     }
     // Column and row gradients with guard bits (setup-time divisions).
@@ -144,7 +160,7 @@ pub fn raster_tri(
                 }
                 w.samples += (c_end - c_start) as u64;
             }
-        } else {
+        } else if above {
             w.rows_walked += 1;
         }
         k += 1;
@@ -166,7 +182,9 @@ pub fn raster_tri(
             // The left edge changes at the middle vertex: re-seed (a setup operation).
             (vi, vz) = seed(&lower, k);
             interp = EdgeInterp::new(&lower, di, dz);
-            w.reseeds += 1;
+            if above || k >= reg.k0 {
+                w.reseeds += 1;
+            }
         } else {
             let c = if t.long_is_left {
                 long_carry
@@ -215,11 +233,23 @@ pub fn raster(
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
+    raster_rows(s, p, reg, true, out, w);
+}
+
+/// [`raster`] on one band of sample rows (see [`raster_tri_rows`] for `above`).
+pub fn raster_rows(
+    s: &Setup,
+    p: &RasterParams,
+    reg: &SampleRegion,
+    above: bool,
+    out: &mut Vec<Frag>,
+    w: &mut RasterWork,
+) {
     match s {
-        Setup::Tri(t) => raster_tri(t, p, reg, out, w),
+        Setup::Tri(t) => raster_tri_rows(t, p, reg, above, out, w),
         Setup::Line(a, b) => {
-            raster_tri(a, p, reg, out, w);
-            raster_tri(b, p, reg, out, w);
+            raster_tri_rows(a, p, reg, above, out, w);
+            raster_tri_rows(b, p, reg, above, out, w);
         }
         Setup::Point(pt) => raster_point(pt, p, reg, out, w),
         Setup::Degenerate => {}

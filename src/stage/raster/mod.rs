@@ -8,7 +8,9 @@
 pub mod fixed;
 pub mod float;
 
-pub use fixed::{RasterParams, RasterWork, raster, raster_point, raster_tri};
+pub use fixed::{
+    RasterParams, RasterWork, raster, raster_point, raster_rows, raster_tri, raster_tri_rows,
+};
 pub use float::{FPrim, FVertex, raster_f64, raster_tri_f64};
 
 pub use super::SampleRegion;
@@ -131,9 +133,11 @@ impl Stage for Raster {
             start: vec![0],
         };
         let mut stepped = Vec::with_capacity(setups.len());
+        // A banded run's later bands do not count the walk above their rows again.
+        let above = cx.layout.band.is_none_or(|b| b.first);
         for s in setups {
             let before = w.samples + w.walked;
-            raster(s, &p, &reg, &mut out.data, &mut w);
+            raster_rows(s, &p, &reg, above, &mut out.data, &mut w);
             out.start.push(out.data.len());
             stepped.push(w.samples + w.walked - before);
         }

@@ -1,0 +1,487 @@
+//! Banded runs: raster, visibility and accumulate, fixed and float, band by band of pixel
+//! rows, so that the sample buffers and the fragment lists hold one band and the peak
+//! memory follows the band, not the screen. The frame memory, the float frame and every
+//! later stage stay whole-frame; the cost model still charges the hardware's full-frame
+//! memories (the stages' costs read the plan's grid, not the band).
+//!
+//! Each band owns a range of sample rows; the bands' own rows partition the plan's sample
+//! region, so every sample is rasterised and resolved exactly once and the work counts,
+//! signals and tokens of the bands add up to the whole-region run's. The accumulate stage
+//! of a band reads its pixel rows' filter windows: the band's own sample rows plus the
+//! rows just before them, which the band before resolved (kept as the tail of its buffer).
+//!
+//! A small plan (the sample-side memory under [`ONE_BAND_MAX`]) runs in one band, which is
+//! the whole-region code path. A plan with the logdomain stage runs in one band too.
+
+use super::plan::Plan;
+use super::run::{Outcome, execute_keep};
+use crate::cost::{PackCheck, pack};
+use crate::error::Result;
+use crate::stage::accumulate::{Frame, PointFrags};
+use crate::stage::taps::{FrameTap, SampleTap, SampleTapF};
+use crate::stage::visibility::{Samples, SamplesF};
+use crate::stage::{
+    self, AnyFixed, Band, Cx, Layout, LocalError, Memo, Region, RunOptions, SampleRegion, StageId,
+    StageReport, Taps, TokenKind, Tokens,
+};
+use std::sync::Arc;
+
+/// Sample-side bytes (sample buffers and fragment lists, from the plan's estimate) up to
+/// which a plan runs in one band.
+pub const ONE_BAND_MAX: u64 = 512 << 20;
+/// Sample-side bytes one band aims at (at least one tile row).
+pub const BAND_BYTES: u64 = 64 << 20;
+
+/// Whether a banded run runs stage `id` band by band.
+pub fn is_banded(id: StageId) -> bool {
+    matches!(
+        id,
+        StageId::Raster | StageId::Visibility | StageId::Accumulate
+    )
+}
+
+/// Pixel rows per band (a multiple of the tile size) of `plan` under `opts`; `None`: one
+/// band (the whole-region run).
+pub fn rows(plan: &Plan, opts: RunOptions) -> Option<u32> {
+    let l = &plan.layout;
+    if l.has(StageId::Logdomain) || l.region.is_empty() || !l.has(StageId::Accumulate) {
+        return None;
+    }
+    let tile = l.tiles.size;
+    let r = match opts.band_rows {
+        Some(r) => r.max(1).div_ceil(tile) * tile,
+        None => {
+            let (buffers, frags) = super::estimate::sample_side(plan, &plan.host, opts);
+            let bytes = buffers + frags;
+            if bytes <= ONE_BAND_MAX as f64 {
+                return None;
+            }
+            let per_row = bytes / f64::from((l.region.y1 - l.region.y0).max(1));
+            let r = (BAND_BYTES as f64 / per_row).floor() as u32;
+            (r / tile).max(1) * tile
+        }
+    };
+    (r < l.grid.height).then_some(r)
+}
+
+/// The bands of `rows` pixel rows over a `height`-row screen.
+pub fn bands(rows: u32, height: u32) -> Vec<Band> {
+    (0..height.div_ceil(rows))
+        .map(|b| Band {
+            y0: b * rows,
+            y1: ((b + 1) * rows).min(height),
+            first: b == 0,
+        })
+        .collect()
+}
+
+/// Sample rows of the plan's sample region a band owns, and the first row its pixels'
+/// filter windows read.
+struct Rows {
+    own: (i64, i64),
+    read: i64,
+}
+
+fn band_rows(l: &Layout, b: &Band, last: bool) -> Rows {
+    let g = l.samples;
+    let n = i64::from(l.grid.n);
+    // The window of pixel row p reads sample rows [p n - off, (p + 1) n + after).
+    let off = i64::from(l.region.y0) * n - g.k0;
+    let after = g.k1 - i64::from(l.region.y1) * n;
+    let clamp = |k: i64| k.clamp(g.k0, g.k1);
+    let lo = if b.first {
+        g.k0
+    } else {
+        clamp(i64::from(b.y0) * n + after)
+    };
+    let hi = if last {
+        g.k1
+    } else {
+        clamp(i64::from(b.y1) * n + after)
+    };
+    Rows {
+        own: (lo, hi),
+        read: clamp(i64::from(b.y0) * n - off).min(lo),
+    }
+}
+
+/// What the bands of one stage add up to.
+#[derive(Default)]
+struct Merge {
+    report: Option<StageReport>,
+    tokens: Option<Tokens>,
+    packs: Vec<PackCheck>,
+    /// Unfinished local errors (mean fields hold sums), the report's and the notes'.
+    local: Option<LocalError>,
+    note_locals: std::collections::BTreeMap<String, LocalError>,
+}
+
+fn unfinish(e: &LocalError) -> LocalError {
+    LocalError {
+        mean_lsb: e.mean_lsb * e.values as f64,
+        ..e.clone()
+    }
+}
+
+fn add_local(into: &mut LocalError, e: &LocalError) {
+    into.values += e.values;
+    into.identical += e.identical;
+    into.max_abs_lsb = into.max_abs_lsb.max(e.max_abs_lsb);
+    into.mean_lsb += e.mean_lsb;
+    into.mismatched_items += e.mismatched_items;
+}
+
+/// A note that is a local error (e.g. the raster's `depth_local`).
+fn local_of(v: &serde_json::Value) -> Option<LocalError> {
+    let o = v.as_object()?;
+    if o.len() != 5 {
+        return None;
+    }
+    let u = |k: &str| o.get(k).and_then(|x| x.as_u64());
+    let f = |k: &str| o.get(k).and_then(|x| x.as_f64());
+    Some(LocalError {
+        values: u("values")?,
+        identical: u("identical")?,
+        max_abs_lsb: f("max_abs_lsb")?,
+        mean_lsb: f("mean_lsb")?,
+        mismatched_items: u("mismatched_items")?,
+    })
+}
+
+impl Merge {
+    fn add(&mut self, o: &Outcome, pack_images: bool) {
+        let r = &o.report;
+        match &mut self.report {
+            None => self.report = Some(r.clone()),
+            Some(m) => {
+                m.fixed_ms += r.fixed_ms;
+                m.float_ms += r.float_ms;
+                m.local_ms += r.local_ms;
+                for (k, v) in &r.work {
+                    *m.work.entry(k.clone()).or_insert(0) += v;
+                }
+                for (a, b) in m.signals.iter_mut().zip(&r.signals) {
+                    a.merge(b);
+                }
+                for (k, v) in &r.notes {
+                    if let (Some(a), Some(b)) =
+                        (m.notes.get(k).and_then(|x| x.as_u64()), v.as_u64())
+                    {
+                        m.notes.insert(k.clone(), (a + b).into());
+                    }
+                }
+            }
+        }
+        if let Some(e) = &r.local {
+            add_local(
+                self.local.get_or_insert_with(LocalError::default),
+                &unfinish(e),
+            );
+        }
+        for (k, v) in &r.notes {
+            if let Some(e) = local_of(v) {
+                add_local(
+                    self.note_locals.entry(k.clone()).or_default(),
+                    &unfinish(&e),
+                );
+            }
+        }
+        if let Some(t) = &o.tokens {
+            match &mut self.tokens {
+                None => self.tokens = Some(t.clone()),
+                Some(m) if m.kind == TokenKind::Primitive => {
+                    for (a, b) in m.items.iter_mut().zip(&t.items) {
+                        *a += b;
+                    }
+                    for (a, b) in m.port_bits.iter_mut().zip(&t.port_bits) {
+                        *a += b;
+                    }
+                }
+                Some(m) => {
+                    m.items.extend_from_slice(&t.items);
+                    m.port_bits.extend_from_slice(&t.port_bits);
+                }
+            }
+        }
+        if pack_images {
+            for p in &o.packs {
+                match self.packs.iter_mut().find(|q| q.name == p.name) {
+                    None => self.packs.push(p.clone()),
+                    Some(q) => {
+                        q.words += p.words;
+                        q.cost_bits += p.cost_bits;
+                        q.bits += p.bits;
+                        q.verified &= p.verified;
+                        if q.problem.is_none() {
+                            q.problem.clone_from(&p.problem);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn finish(mut self, taps: Taps, packs: Option<Vec<PackCheck>>) -> Outcome {
+        let mut report = self.report.take().unwrap_or_default();
+        report.local = self.local.map(LocalError::finish);
+        for (k, e) in self.note_locals {
+            report
+                .notes
+                .insert(k, serde_json::to_value(e.finish()).unwrap_or_default());
+        }
+        Outcome {
+            taps,
+            report,
+            tokens: self.tokens,
+            packs: packs.unwrap_or(self.packs),
+            images: Vec::new(),
+        }
+    }
+}
+
+/// The rows `k0..` the next band's filter windows may still read: the previous band's
+/// accumulate input.
+struct Tail {
+    k0: i64,
+    fixed: Arc<SampleTap>,
+    float: Arc<SampleTapF>,
+}
+
+fn join_points<T: Copy>(
+    tail: Option<(&[PointFrags<T>], usize)>,
+    band: &[PointFrags<T>],
+    shift: usize,
+) -> Vec<PointFrags<T>> {
+    band.iter()
+        .enumerate()
+        .map(|(j, p)| {
+            let mut samples = Vec::new();
+            if let Some((t, skip)) = tail {
+                samples.extend(
+                    t[j].samples
+                        .iter()
+                        .filter(|&&s| s as usize >= skip)
+                        .map(|&s| s - skip as u32),
+                );
+            }
+            samples.extend(p.samples.iter().map(|&s| s + shift as u32));
+            PointFrags { i: p.i, samples }
+        })
+        .collect()
+}
+
+/// Joins the kept rows `read..own.0` of `tail` with the band's own buffers: the sample
+/// buffer the band's filter windows read, its rows shifted up by `dk` (the band's frame
+/// starts at row 0).
+fn join(tail: Option<&Tail>, read: i64, dk: i64, own: &SampleTap, own_f: &SampleTapF) -> Tail {
+    let reg = own.samples.reg;
+    let w = reg.width();
+    let kept = (reg.k0 - read) as usize * w;
+    let skip = tail.map_or(0, |t| (read - t.k0) as usize * w);
+    let joined = SampleRegion {
+        k0: read - dk,
+        k1: reg.k1 - dk,
+        ..reg
+    };
+    fn cat<T: Copy>(a: Option<&[T]>, skip: usize, kept: usize, b: &[T]) -> Vec<T> {
+        let mut v = Vec::with_capacity(kept + b.len());
+        if let Some(a) = a {
+            v.extend_from_slice(&a[skip..skip + kept]);
+        }
+        v.extend_from_slice(b);
+        v
+    }
+    let ts = tail.map(|t| &t.fixed.samples);
+    let tf = tail.map(|t| &t.float.samples);
+    let fixed = SampleTap {
+        samples: Samples {
+            reg: joined,
+            z: cat(ts.map(|s| s.z.as_slice()), skip, kept, &own.samples.z),
+            prim: cat(ts.map(|s| s.prim.as_slice()), skip, kept, &own.samples.prim),
+            i: cat(ts.map(|s| s.i.as_slice()), skip, kept, &own.samples.i),
+        },
+        points: join_points(
+            tail.map(|t| (t.fixed.points.as_slice(), skip)),
+            &own.points,
+            kept,
+        ),
+        bg: own.bg,
+        coding: own.coding,
+    };
+    let float = SampleTapF {
+        samples: SamplesF {
+            reg: joined,
+            z: cat(tf.map(|s| s.z.as_slice()), skip, kept, &own_f.samples.z),
+            prim: cat(
+                tf.map(|s| s.prim.as_slice()),
+                skip,
+                kept,
+                &own_f.samples.prim,
+            ),
+            i: cat(tf.map(|s| s.i.as_slice()), skip, kept, &own_f.samples.i),
+        },
+        points: join_points(
+            tail.map(|t| (t.float.points.as_slice(), skip)),
+            &own_f.points,
+            kept,
+        ),
+        bg: own_f.bg,
+    };
+    Tail {
+        k0: read,
+        fixed: Arc::new(fixed),
+        float: Arc::new(float),
+    }
+}
+
+/// Runs the banded stages `group` (raster, visibility, accumulate in flow order) of `plan`
+/// band by band of `rows` pixel rows on the taps `input`, and returns each stage's merged
+/// outcome: work, signals, tokens, local errors and timings added up over the bands; the
+/// taps after raster and visibility without fragment lists and sample buffers (no stage
+/// keeps a whole-screen one); the whole frame and float frame after accumulate.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    group: &[StageId],
+    scene: &crate::scene::Scene,
+    hw: &crate::config::HwConfig,
+    plan: &Plan,
+    opts: RunOptions,
+    memo: &dyn Memo,
+    input_keys: &[u64],
+    input: &Taps,
+    rows: u32,
+) -> Result<Vec<Outcome>> {
+    let l = &plan.layout;
+    let (width, height) = (l.grid.width, l.grid.height);
+    let npix = width as usize * height as usize;
+    let mut frame = Frame {
+        width,
+        height,
+        acc: vec![0; npix],
+        depth: vec![0; npix],
+        coverage: vec![0; npix],
+    };
+    let mut frame_f = vec![0.0; npix];
+    let mut coding = None;
+    let mut merged: Vec<Merge> = group.iter().map(|_| Merge::default()).collect();
+    let mut tail: Option<Tail> = None;
+    let mut last_acc: Option<AnyFixed> = None;
+    let list = bands(rows, height);
+    let n = i64::from(l.grid.n);
+    for (bi, b) in list.iter().enumerate() {
+        let r = band_rows(l, b, bi + 1 == list.len());
+        let own = SampleRegion {
+            k0: r.own.0,
+            k1: r.own.1,
+            ..l.samples
+        };
+        let geo = Layout {
+            samples: own,
+            band: Some(*b),
+            ..l.clone()
+        };
+        let mut taps = input.clone();
+        for (j, &id) in group.iter().enumerate() {
+            let st = stage::get(id);
+            let dk = i64::from(b.y0) * n;
+            let acc_layout;
+            let layout = if id == StageId::Accumulate {
+                let joined = join(
+                    tail.as_ref(),
+                    r.read,
+                    dk,
+                    taps.fixed.samples(),
+                    taps.float.samples(),
+                );
+                let rows = Region {
+                    y0: b.y0,
+                    y1: b.y1,
+                    ..Region::screen(width, height)
+                };
+                let c = l.region.clip(&rows);
+                let region = if c.is_empty() {
+                    Region::default()
+                } else {
+                    Region {
+                        y0: c.y0 - b.y0,
+                        y1: c.y1 - b.y0,
+                        ..c
+                    }
+                };
+                acc_layout = Layout {
+                    region,
+                    samples: joined.fixed.samples.reg,
+                    tiles: l.tiles.band(b.y0, b.y1),
+                    ..geo.clone()
+                };
+                taps.fixed.samples = Some(joined.fixed.clone());
+                taps.float.samples = Some(joined.float.clone());
+                tail = Some(joined);
+                &acc_layout
+            } else {
+                &geo
+            };
+            let cx = Cx {
+                scene,
+                hw,
+                layout,
+                opts,
+                input_key: input_keys[j],
+                memo,
+            };
+            let (o, fixed) = execute_keep(st, &cx, &taps)?;
+            merged[j].add(&o, id != StageId::Accumulate);
+            taps = o.taps;
+            if id == StageId::Accumulate {
+                let band = taps.fixed.frame();
+                let at = b.y0 as usize * width as usize;
+                let len = band.frame.acc.len();
+                frame.acc[at..at + len].copy_from_slice(&band.frame.acc);
+                frame.depth[at..at + len].copy_from_slice(&band.frame.depth);
+                frame.coverage[at..at + len].copy_from_slice(&band.frame.coverage);
+                frame_f[at..at + len].copy_from_slice(taps.float.frame());
+                coding = Some(band.coding.clone());
+                last_acc = Some(fixed);
+            }
+        }
+    }
+    drop(tail);
+    // The taps after each stage: no fragment lists or sample buffers; the whole frame.
+    let mut taps = input.clone();
+    let mut out = Vec::with_capacity(group.len());
+    for (j, (&id, m)) in group.iter().zip(merged).enumerate() {
+        let mut packs = None;
+        if id == StageId::Accumulate {
+            taps.fixed.frame = Some(Arc::new(FrameTap {
+                frame: std::mem::replace(
+                    &mut frame,
+                    Frame {
+                        width,
+                        height,
+                        acc: Vec::new(),
+                        depth: Vec::new(),
+                        coverage: Vec::new(),
+                    },
+                ),
+                coding: coding.clone().expect("a band ran"),
+            }));
+            taps.float.frame = Some(Arc::new(std::mem::take(&mut frame_f)));
+            // The memories of the whole frame, packed once.
+            let cx = Cx {
+                scene,
+                hw,
+                layout: l,
+                opts,
+                input_key: input_keys[j],
+                memo,
+            };
+            let st = stage::get(id);
+            let fixed = last_acc.take().expect("a band ran");
+            let cost = st.cost(&cx, &fixed);
+            let images = st.memories(&cx, &fixed, &taps);
+            packs = Some(pack::check(&cost, &images));
+        }
+        out.push(m.finish(taps.clone(), packs));
+    }
+    Ok(out)
+}
