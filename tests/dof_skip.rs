@@ -164,11 +164,12 @@ fn blocks(w: usize, h: usize, seed: u64, b: usize) -> (Vec<u32>, Vec<u32>, Vec<u
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
     /// Random block images, tiny to medium, with masks larger than the image, narrow words
-    /// (saturation, ERROR) and the hardware option: the skip is exact.
+    /// (saturation, ERROR), a line word wider than 32 bits and the hardware option: the skip
+    /// is exact.
     #[test]
     fn random_depth_images_skip_is_exact(
         w in 1usize..70, h in 1usize..100, seed in any::<u64>(), b in 1usize..24,
-        narrow in 0u32..3, tiles in any::<bool>(),
+        narrow in 0u32..4, tiles in any::<bool>(),
     ) {
         let (v, k, c) = blocks(w, h, seed, b);
         let mut p = HwConfig::default_config().dof;
@@ -176,6 +177,8 @@ proptest! {
         match narrow {
             1 => { p.line_bits = 24; p.acc_bits = 30; }
             2 => { p.line_bits = 24; p.acc_bits = 30; p.overflow = Overflow::Error; }
+            // A line word wider than 32 bits: the strips' planes are u64 words.
+            3 => { p.line_bits = 40; p.acc_bits = 60; }
             _ => {}
         }
         let Ok(plan) = plan_layers(&k, &c, 16, &lens(), &p) else { return Ok(()); };

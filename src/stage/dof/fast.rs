@@ -37,6 +37,45 @@ impl Word for u128 {
     }
 }
 
+/// A plane word of the emulator: `u32` where every value of the run provably fits (the tap
+/// multiplies are then 32 x 32 -> 64 bits, which vectorise), `u64` otherwise. The hardware's
+/// widths are the configured ones either way.
+pub(super) trait Plane: Copy + Default + PartialEq + 'static {
+    fn get(self) -> u64;
+    /// `v`, which the caller has proven to fit.
+    fn put(v: u64) -> Self;
+    /// The planes as `u64` words (the HDL observer's), when they are.
+    fn as_u64(s: &[Self]) -> Option<&[u64]>;
+}
+
+impl Plane for u32 {
+    #[inline(always)]
+    fn get(self) -> u64 {
+        u64::from(self)
+    }
+    #[inline(always)]
+    fn put(v: u64) -> Self {
+        v as u32
+    }
+    fn as_u64(_: &[Self]) -> Option<&[u64]> {
+        None
+    }
+}
+
+impl Plane for u64 {
+    #[inline(always)]
+    fn get(self) -> u64 {
+        self
+    }
+    #[inline(always)]
+    fn put(v: u64) -> Self {
+        v
+    }
+    fn as_u64(s: &[Self]) -> Option<&[u64]> {
+        Some(s)
+    }
+}
+
 /// Whether sums of `max * 2^f` fit a `u64` (the taps sum to `2^f`).
 pub(super) fn fits_u64(max: u128, f: u32) -> bool {
     max.checked_shl(f)
@@ -46,7 +85,7 @@ pub(super) fn fits_u64(max: u128, f: u32) -> bool {
 /// The horizontal pass of row `src` (`bw` samples, taps `c`) at the positions `need`
 /// selects: the exact colour and alpha sums (before saturation).
 #[inline]
-pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u64], ra: &[u64], x: usize) -> (u128, u128) {
+pub(super) fn hsum<W: Word, P: Plane>(c: &[P], rx: &[P], ra: &[P], x: usize) -> (u128, u128) {
     let m = c.len() / 2;
     let bw = rx.len();
     let t0 = m.saturating_sub(x);
@@ -59,9 +98,9 @@ pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u64], ra: &[u64], x: usize) -> (u12
         .zip(&rx[base..base + n])
         .zip(&ra[base..base + n])
     {
-        let cw = W::of(cv as u128);
-        sx += cw * W::of(vx as u128);
-        sa += cw * W::of(va as u128);
+        let cw = W::of(cv.get() as u128);
+        sx += cw * W::of(vx.get() as u128);
+        sa += cw * W::of(va.get() as u128);
     }
     (sx.wide(), sa.wide())
 }
@@ -70,10 +109,10 @@ pub(super) fn hsum<W: Word>(c: &[u64], rx: &[u64], ra: &[u64], x: usize) -> (u12
 /// exact colour and alpha sums into `ox`, `oa` (indexed by column).
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub(super) fn vsum_row<W: Word>(
-    c: &[u64],
-    hx: &[u64],
-    ha: &[u64],
+pub(super) fn vsum_row<W: Word, P: Plane>(
+    c: &[P],
+    hx: &[P],
+    ha: &[P],
     (bw, bh): (usize, usize),
     y: usize,
     (xa, xb): (usize, usize),
@@ -88,14 +127,14 @@ pub(super) fn vsum_row<W: Word>(
     oa.fill(W::default());
     for (t, &cv) in c.iter().enumerate().take(t1).skip(t0) {
         let row = (y + t - m) * bw;
-        let cw = W::of(cv as u128);
+        let cw = W::of(cv.get() as u128);
         for ((o, &v), (p, &a)) in ox
             .iter_mut()
             .zip(&hx[row + xa..row + xb])
             .zip(oa.iter_mut().zip(&ha[row + xa..row + xb]))
         {
-            *o += cw * W::of(v as u128);
-            *p += cw * W::of(a as u128);
+            *o += cw * W::of(v.get() as u128);
+            *p += cw * W::of(a.get() as u128);
         }
     }
 }

@@ -2,8 +2,9 @@
 //! tap passes ([`row_mac`], the HDL model's reference), the layer colour and alpha, and the
 //! back-to-front composite; work and overflow counts in [`DofWork`].
 
+use super::fast::{self, Plane};
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
-use super::{fast, uniform};
+use super::uniform;
 use crate::config::DofCfg;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
 use serde::Serialize;
@@ -134,11 +135,11 @@ impl RowSums {
     }
 
     /// The sums of row `y` at every run of columns with `uniform` false.
-    fn fill(
+    fn fill<P: Plane>(
         &mut self,
-        c: &[u64],
-        hx: &[u64],
-        ha: &[u64],
+        c: &[P],
+        hx: &[P],
+        ha: &[P],
         dim: (usize, usize),
         y: usize,
         uniform: &[bool],
@@ -190,20 +191,33 @@ impl RowSums {
 
 /// A layer's planes over a strip of its box, kept between strips and layers (one
 /// allocation for the largest): the input colour `x * m`, alpha `m` and value, the
-/// full-share flags, the uniform windows, the line buffer and one row's vertical sums.
-#[derive(Default)]
-struct Scratch {
-    xi: Vec<u64>,
-    ai: Vec<u64>,
+/// full-share flags, the uniform windows, the line buffer and one row's vertical sums, in
+/// [`Plane`] words.
+struct Scratch<P> {
+    xi: Vec<P>,
+    ai: Vec<P>,
     val: Vec<u32>,
     full: Vec<bool>,
     win: uniform::Windows,
-    hx: Vec<u64>,
-    ha: Vec<u64>,
+    hx: Vec<P>,
+    ha: Vec<P>,
     rows: RowSums,
 }
 
-impl Scratch {
+impl<P: Plane> Scratch<P> {
+    fn new() -> Self {
+        Self {
+            xi: Vec::new(),
+            ai: Vec::new(),
+            val: Vec::new(),
+            full: Vec::new(),
+            win: uniform::Windows::default(),
+            hx: Vec::new(),
+            ha: Vec::new(),
+            rows: RowSums::default(),
+        }
+    }
+
     /// Layer `l`'s input planes over the rectangle `(x0, y0, bw, bh)`.
     fn input(
         &mut self,
@@ -221,8 +235,8 @@ impl Scratch {
             let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
             for x in 0..bw {
                 let s = share(plan, key[x], cov[x], idx[x], l, img.n2);
-                self.xi.push(u64::from(value[x]) * u64::from(s));
-                self.ai.push(u64::from(s));
+                self.xi.push(P::put(u64::from(value[x]) * u64::from(s)));
+                self.ai.push(P::put(u64::from(s)));
                 self.val.push(value[x]);
             }
         }
@@ -302,6 +316,37 @@ pub fn layered_fixed_exec(
     p: &DofCfg,
     frame_fmt: QFormat,
     exec: Exec,
+    observe: impl FnMut(&LayerPlanes),
+) -> Result<FixedRun, (String, u32)> {
+    // In strips, the planes are u32 words where every value fits: the input colour (a code
+    // times n2), the saturated line buffer and the alpha sums (the taps' sum times n2).
+    let n2 = u64::from(img.n2);
+    let vmax = u64::from(img.value.iter().copied().max().unwrap_or(0));
+    let csum = plan
+        .layers
+        .iter()
+        .map(|l| l.coef.iter().sum::<u64>())
+        .max()
+        .unwrap_or(0);
+    let fits = |v: u64| v <= u64::from(u32::MAX);
+    let narrow = matches!(exec, Exec::Strips(_))
+        && fits(vmax * n2)
+        && fits(csum.saturating_mul(n2))
+        && p.line_bits <= 32;
+    if narrow {
+        exec_with::<u32>(img, plan, p, frame_fmt, exec, observe)
+    } else {
+        exec_with::<u64>(img, plan, p, frame_fmt, exec, observe)
+    }
+}
+
+/// [`layered_fixed_exec`] with planes of `P` words.
+fn exec_with<P: Plane>(
+    img: &DepthImage<u32>,
+    plan: &LayerPlan,
+    p: &DofCfg,
+    frame_fmt: QFormat,
+    exec: Exec,
     mut observe: impl FnMut(&LayerPlanes),
 ) -> Result<FixedRun, (String, u32)> {
     let (w, h) = (img.width, img.height);
@@ -315,7 +360,7 @@ pub fn layered_fixed_exec(
     let one_q = 1u128 << q;
     let n2 = u64::from(img.n2);
     let boxes = layer_boxes(w, h, plan);
-    let mut s = Scratch::default();
+    let mut s = Scratch::<P>::new();
     for (l, layer) in plan.layers.iter().enumerate() {
         let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
@@ -329,7 +374,10 @@ pub fn layered_fixed_exec(
             s.input(img, plan, l, (x0, y0, bw, bh));
             for y in 0..bh {
                 for x in 0..bw {
-                    let (a, v) = (s.ai[y * bw + x] as u128, s.xi[y * bw + x] as u128);
+                    let (a, v) = (
+                        s.ai[y * bw + x].get() as u128,
+                        s.xi[y * bw + x].get() as u128,
+                    );
                     if a == 0 {
                         continue;
                     }
@@ -350,6 +398,8 @@ pub fn layered_fixed_exec(
             _ => usize::MAX,
         };
         let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
+        let cp: Vec<P> = c.iter().map(|&v| P::put(v)).collect();
+        let cp = &cp[..];
         // Output rows [r0, r1) of the box per strip; the planes cover [e0, e1), M more rows
         // each side (clipped to the box), whose uniform windows and sums for [r0, r1) are
         // those of the whole box (docs/dof.md, "Strips").
@@ -367,7 +417,7 @@ pub fn layered_fixed_exec(
             // Uniform windows (docs/dof.md): exact without MACs where, besides the window
             // being uniform, neither word saturates and the box's tap sums are the image's.
             s.full.clear();
-            s.full.extend(ai.iter().map(|&a| a == n2));
+            s.full.extend(ai.iter().map(|&a| a.get() == n2));
             s.win.compute(bw, eh, layer.m, &s.full, val);
             let u = &mut s.win.u;
             for yy in 0..eh {
@@ -375,7 +425,7 @@ pub fn layered_fixed_exec(
                 for x in 0..bw {
                     let i = yy * bw + x;
                     if u[i] {
-                        let hxv = xi[i] as u128 * bsx[x] as u128;
+                        let hxv = xi[i].get() as u128 * bsx[x] as u128;
                         u[i] = hxv <= line_max
                             && hxv * bsy[y] as u128 <= acc_max
                             && bsx[x] == wx[x + x0]
@@ -411,19 +461,19 @@ pub fn layered_fixed_exec(
                 for x in 0..bw {
                     let i = yy * bw + x;
                     let r = match exec {
-                        Exec::Full => {
-                            row_mac(c, x, bw, line_max, |i| (rx[i] as u128, ra[i] as u128))
-                        }
+                        Exec::Full => row_mac(c, x, bw, line_max, |i| {
+                            (rx[i].get() as u128, ra[i].get() as u128)
+                        }),
                         _ if hu[i] => fast::mac_out(
-                            rx[x] as u128 * bsx[x] as u128,
-                            ra[x] as u128 * bsx[x] as u128,
+                            rx[x].get() as u128 * bsx[x] as u128,
+                            ra[x].get() as u128 * bsx[x] as u128,
                             line_max,
                         ),
                         _ => {
                             let (sx, sa) = if wide_h {
-                                fast::hsum::<u128>(c, rx, ra, x)
+                                fast::hsum::<u128, P>(cp, rx, ra, x)
                             } else {
-                                fast::hsum::<u64>(c, rx, ra, x)
+                                fast::hsum::<u64, P>(cp, rx, ra, x)
                             };
                             fast::mac_out(sx, sa, line_max)
                         }
@@ -434,13 +484,19 @@ pub fn layered_fixed_exec(
                             return Err(("dof.line".into(), p.line_bits));
                         }
                     }
-                    hx.push(r.x as u64);
-                    ha.push(r.a as u64);
+                    hx.push(P::put(r.x as u64));
+                    ha.push(P::put(r.a as u64));
                     hmax = hmax.max(r.x as u64).max(r.a as u64);
                 }
             }
             let (hx, ha) = (&hx[..], &ha[..]);
-            if strip >= bh {
+            if let (true, Some(xi), Some(ai), Some(hx), Some(ha)) = (
+                strip >= bh,
+                P::as_u64(xi),
+                P::as_u64(ai),
+                P::as_u64(hx),
+                P::as_u64(ha),
+            ) {
                 observe(&LayerPlanes {
                     layer: l,
                     x0,
@@ -460,7 +516,7 @@ pub fn layered_fixed_exec(
                 let yy = y - e0;
                 let ur = &u[yy * bw..(yy + 1) * bw];
                 if exec != Exec::Full {
-                    s.rows.fill(c, hx, ha, (bw, eh), yy, ur);
+                    s.rows.fill(cp, hx, ha, (bw, eh), yy, ur);
                 }
                 for x in 0..bw {
                     let i = yy * bw + x;
@@ -485,7 +541,7 @@ pub fn layered_fixed_exec(
                     }
                     let r = match exec {
                         Exec::Full => row_mac(c, yy, eh, acc_max, |i| {
-                            (hx[i * bw + x] as u128, ha[i * bw + x] as u128)
+                            (hx[i * bw + x].get() as u128, ha[i * bw + x].get() as u128)
                         }),
                         _ => {
                             let (sx, sa) = s.rows.get(x);
