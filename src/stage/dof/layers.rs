@@ -85,8 +85,18 @@ pub fn plan_layers(
     lens: &LensMap,
     p: &DofCfg,
 ) -> Result<LayerPlan, String> {
-    // The background code (most pixels of a typical frame) is added once, not sorted.
-    let mut keys: Vec<u32> = key.iter().copied().filter(|&k| k != u32::MAX).collect();
+    // The background code (most pixels of a typical frame) is added once, not sorted; nor
+    // is a pixel repeating its left neighbour's code.
+    let mut last = u32::MAX;
+    let mut keys: Vec<u32> = key
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let new = k != u32::MAX && k != last;
+            last = k;
+            new
+        })
+        .collect();
     if key.contains(&u32::MAX) || cov.iter().any(|&c| (c as u32) < n2) {
         keys.push(u32::MAX);
     }
@@ -97,9 +107,10 @@ pub fn plan_layers(
     // so the largest mask over the depth codes present bounds them all: check it before any
     // mask is built (a huge lens would otherwise allocate huge masks), and name it, so that
     // raising the limit to it is enough.
-    if let Some((worst, s)) = keys
+    let sigs: Vec<f64> = keys.iter().map(|&k| sig(k)).collect();
+    if let Some((&worst, &s)) = keys
         .iter()
-        .map(|&k| (k, sig(k)))
+        .zip(&sigs)
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
     {
         let m = half_size(s, p.k);
@@ -137,16 +148,14 @@ pub fn plan_layers(
     let mut layers: Vec<Layer> = Vec::new();
     let mut i = 0;
     while i < keys.len() {
-        let far = keys[i];
-        let s_far = sig(far);
+        let (far, s_far) = (keys[i], sigs[i]);
         let mut j = i;
         // Neighbouring depth codes mostly share their sigma codes: the test depends only on
         // (sigma far, sigma near, sigma middle), so a repeat of the last accepted pair is
         // accepted without looking the differences up.
         let mut accepted: Option<(u64, u64)> = None;
         while j + 1 < keys.len() {
-            let near = keys[j + 1];
-            let s_near = sig(near);
+            let (near, s_near) = (keys[j + 1], sigs[j + 1]);
             let (_, s_mid) = mid_sigma(far, near);
             let pair = (s_near.to_bits(), s_mid.to_bits());
             if accepted != Some(pair) {
