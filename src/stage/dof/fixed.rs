@@ -6,7 +6,7 @@ use super::fast::{self, Plane};
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::uniform;
 use crate::config::DofCfg;
-use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift, round_shift_i64};
 use serde::Serialize;
 
 /// Work and overflow counts of the fixed model.
@@ -355,7 +355,9 @@ fn exec_with<P: Plane>(
     let acc_max: u128 = (1u128 << p.acc_bits) - 1;
     let mut work = DofWork::default();
     let mut skipped = vec![0u64; plan.layers.len()];
-    let mut out = vec![0u128; w * h];
+    // A composite never exceeds the largest code times 2^g (every colour is a weighted mean
+    // of codes, docs/dof.md): u64 words.
+    let mut out = vec![0u64; w * h];
     let mut def = vec![false; w * h];
     let one_q = 1u128 << q;
     let n2 = u64::from(img.n2);
@@ -562,9 +564,9 @@ fn exec_with<P: Plane>(
                         work.divides += 1;
                     }
                     // colour = round(F 2^g / A): half-up integer divide
-                    let col = ((sx << (g + 1)) / sa).div_ceil(2);
+                    let col = udiv(sx << (g + 1), sa).div_ceil(2);
                     let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
-                    let aq = (((sa << (q + 1)) / ws).div_ceil(2)).min(one_q);
+                    let aq = udiv(sa << (q + 1), ws).div_ceil(2).min(one_q);
                     composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
                     work.composites += 1;
                 }
@@ -581,7 +583,7 @@ fn exec_with<P: Plane>(
     let res = out
         .iter()
         .map(|&v| {
-            let r = frame_q.quantize_raw(v as i128, raw_frac);
+            let r = frame_q.quantize_raw(i128::from(v), raw_frac);
             work.out_overflows += u64::from(r.overflow);
             r.code as u32
         })
@@ -593,12 +595,27 @@ fn exec_with<P: Plane>(
 /// first layer at a pixel, or an opaque one (`aq = one`: the quotient is exact), writes
 /// `col`.
 #[inline]
-fn composite(o: &mut u128, d: &mut bool, col: u128, aq: u128, one: u128, q: u32, quant: Quant) {
+fn composite(o: &mut u64, d: &mut bool, col: u128, aq: u128, one: u128, q: u32, quant: Quant) {
+    debug_assert!(col <= u128::from(u64::MAX));
     if !*d || aq == one {
-        *o = col;
+        *o = col as u64;
         *d = true;
     } else {
-        let num = col * aq + *o * (one - aq);
-        *o = round_shift(num as i128, q, quant) as u128;
+        let num = col * aq + u128::from(*o) * (one - aq);
+        *o = if num >> 63 == 0 {
+            round_shift_i64(num as i64, q, quant) as u64
+        } else {
+            round_shift(num as i128, q, quant) as u64
+        };
+    }
+}
+
+/// `a / b`, in 64-bit words when both fit (the common case; the same quotient).
+#[inline(always)]
+fn udiv(a: u128, b: u128) -> u128 {
+    if (a | b) >> 64 == 0 {
+        u128::from(a as u64 / b as u64)
+    } else {
+        a / b
     }
 }
