@@ -122,6 +122,28 @@ pub(super) fn vsum_row<W: Word, P: Plane>(
     let m = c.len() / 2;
     let t0 = m.saturating_sub(y);
     let t1 = c.len().min((bh + m).saturating_sub(y));
+    // Columns in groups of `L`: every tap into registers, one store per column.
+    const L: usize = 8;
+    let mut x = xa;
+    while x + L <= xb {
+        let (mut sx, mut sa) = ([W::default(); L], [W::default(); L]);
+        for (t, &cv) in c.iter().enumerate().take(t1).skip(t0) {
+            let row = (y + t - m) * bw + x;
+            let cw = W::of(cv.get() as u128);
+            let (hr, ar): (&[P; L], &[P; L]) = (
+                hx[row..row + L].try_into().expect("L columns"),
+                ha[row..row + L].try_into().expect("L columns"),
+            );
+            for j in 0..L {
+                sx[j] += cw * W::of(hr[j].get() as u128);
+                sa[j] += cw * W::of(ar[j].get() as u128);
+            }
+        }
+        ox[x..x + L].copy_from_slice(&sx);
+        oa[x..x + L].copy_from_slice(&sa);
+        x += L;
+    }
+    let xa = x;
     let (ox, oa) = (&mut ox[xa..xb], &mut oa[xa..xb]);
     ox.fill(W::default());
     oa.fill(W::default());
