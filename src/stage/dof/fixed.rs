@@ -4,6 +4,7 @@
 
 use super::fast::{self, Plane};
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
+use super::scratch::Scratch;
 use super::uniform;
 use crate::config::DofCfg;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift, round_shift_i64};
@@ -111,136 +112,6 @@ pub struct LayerPlanes<'a> {
     pub hx: &'a [u64],
     /// Line buffer: horizontal alpha sums.
     pub ha: &'a [u64],
-}
-
-/// One output row's exact vertical sums over the columns whose window is not uniform.
-#[derive(Default)]
-struct RowSums {
-    narrow: (Vec<u64>, Vec<u64>),
-    wide: (Vec<u128>, Vec<u128>),
-    is_wide: bool,
-}
-
-impl RowSums {
-    /// Sums of `bw` columns, in `u128` words when `is_wide`.
-    fn reset(&mut self, bw: usize, is_wide: bool) {
-        self.is_wide = is_wide;
-        if is_wide {
-            self.wide.0.resize(bw, 0);
-            self.wide.1.resize(bw, 0);
-        } else {
-            self.narrow.0.resize(bw, 0);
-            self.narrow.1.resize(bw, 0);
-        }
-    }
-
-    /// The sums of row `y` at every run of columns with `uniform` false.
-    fn fill<P: Plane>(
-        &mut self,
-        c: &[P],
-        hx: &[P],
-        ha: &[P],
-        dim: (usize, usize),
-        y: usize,
-        uniform: &[bool],
-    ) {
-        let mut x = 0;
-        while x < uniform.len() {
-            if uniform[x] {
-                x += 1;
-                continue;
-            }
-            let xa = x;
-            while x < uniform.len() && !uniform[x] {
-                x += 1;
-            }
-            if self.is_wide {
-                fast::vsum_row(
-                    c,
-                    hx,
-                    ha,
-                    dim,
-                    y,
-                    (xa, x),
-                    &mut self.wide.0,
-                    &mut self.wide.1,
-                );
-            } else {
-                fast::vsum_row(
-                    c,
-                    hx,
-                    ha,
-                    dim,
-                    y,
-                    (xa, x),
-                    &mut self.narrow.0,
-                    &mut self.narrow.1,
-                );
-            }
-        }
-    }
-
-    fn get(&self, x: usize) -> (u128, u128) {
-        if self.is_wide {
-            (self.wide.0[x], self.wide.1[x])
-        } else {
-            (self.narrow.0[x] as u128, self.narrow.1[x] as u128)
-        }
-    }
-}
-
-/// A layer's planes over a strip of its box, kept between strips and layers (one
-/// allocation for the largest): the input colour `x * m`, alpha `m` and value, the
-/// full-share flags, the uniform windows, the line buffer and one row's vertical sums, in
-/// [`Plane`] words.
-struct Scratch<P> {
-    xi: Vec<P>,
-    ai: Vec<P>,
-    val: Vec<u32>,
-    full: Vec<bool>,
-    win: uniform::Windows,
-    hx: Vec<P>,
-    ha: Vec<P>,
-    rows: RowSums,
-}
-
-impl<P: Plane> Scratch<P> {
-    fn new() -> Self {
-        Self {
-            xi: Vec::new(),
-            ai: Vec::new(),
-            val: Vec::new(),
-            full: Vec::new(),
-            win: uniform::Windows::default(),
-            hx: Vec::new(),
-            ha: Vec::new(),
-            rows: RowSums::default(),
-        }
-    }
-
-    /// Layer `l`'s input planes over the rectangle `(x0, y0, bw, bh)`.
-    fn input(
-        &mut self,
-        img: &DepthImage<u32>,
-        plan: &LayerPlan,
-        l: usize,
-        (x0, y0, bw, bh): (usize, usize, usize, usize),
-    ) {
-        self.xi.clear();
-        self.ai.clear();
-        self.val.clear();
-        for y in y0..y0 + bh {
-            let r = y * img.width + x0..y * img.width + x0 + bw;
-            let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
-            let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
-            for x in 0..bw {
-                let s = share(plan, key[x], cov[x], idx[x], l, img.n2);
-                self.xi.push(P::put(u64::from(value[x]) * u64::from(s)));
-                self.ai.push(P::put(u64::from(s)));
-                self.val.push(value[x]);
-            }
-        }
-    }
 }
 
 /// The pixel's share in a layer (in `1/n2` units).

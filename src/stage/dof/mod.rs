@@ -101,6 +101,7 @@ mod mask;
 mod method;
 mod potentiate;
 mod reference;
+mod scratch;
 mod stage;
 mod uniform;
 

@@ -1,0 +1,138 @@
+//! The fixed layered passes' buffers, kept between strips and layers
+//! ([`super::fixed`]): a strip's input planes, uniform windows and line buffer, and one
+//! output row's vertical sums.
+
+use super::fast::{self, Plane};
+use super::fixed::share;
+use super::layers::{DepthImage, LayerPlan};
+use super::uniform;
+
+/// One output row's exact vertical sums over the columns whose window is not uniform.
+#[derive(Default)]
+pub(super) struct RowSums {
+    narrow: (Vec<u64>, Vec<u64>),
+    wide: (Vec<u128>, Vec<u128>),
+    is_wide: bool,
+}
+
+impl RowSums {
+    /// Sums of `bw` columns, in `u128` words when `is_wide`.
+    pub(super) fn reset(&mut self, bw: usize, is_wide: bool) {
+        self.is_wide = is_wide;
+        if is_wide {
+            self.wide.0.resize(bw, 0);
+            self.wide.1.resize(bw, 0);
+        } else {
+            self.narrow.0.resize(bw, 0);
+            self.narrow.1.resize(bw, 0);
+        }
+    }
+
+    /// The sums of row `y` at every run of columns with `uniform` false.
+    pub(super) fn fill<P: Plane>(
+        &mut self,
+        c: &[P],
+        hx: &[P],
+        ha: &[P],
+        dim: (usize, usize),
+        y: usize,
+        uniform: &[bool],
+    ) {
+        let mut x = 0;
+        while x < uniform.len() {
+            if uniform[x] {
+                x += 1;
+                continue;
+            }
+            let xa = x;
+            while x < uniform.len() && !uniform[x] {
+                x += 1;
+            }
+            if self.is_wide {
+                fast::vsum_row(
+                    c,
+                    hx,
+                    ha,
+                    dim,
+                    y,
+                    (xa, x),
+                    &mut self.wide.0,
+                    &mut self.wide.1,
+                );
+            } else {
+                fast::vsum_row(
+                    c,
+                    hx,
+                    ha,
+                    dim,
+                    y,
+                    (xa, x),
+                    &mut self.narrow.0,
+                    &mut self.narrow.1,
+                );
+            }
+        }
+    }
+
+    pub(super) fn get(&self, x: usize) -> (u128, u128) {
+        if self.is_wide {
+            (self.wide.0[x], self.wide.1[x])
+        } else {
+            (self.narrow.0[x] as u128, self.narrow.1[x] as u128)
+        }
+    }
+}
+
+/// A layer's planes over a strip of its box, kept between strips and layers (one
+/// allocation for the largest): the input colour `x * m`, alpha `m` and value, the
+/// full-share flags, the uniform windows, the line buffer and one row's vertical sums, in
+/// [`Plane`] words.
+pub(super) struct Scratch<P> {
+    pub xi: Vec<P>,
+    pub ai: Vec<P>,
+    pub val: Vec<u32>,
+    pub full: Vec<bool>,
+    pub win: uniform::Windows,
+    pub hx: Vec<P>,
+    pub ha: Vec<P>,
+    pub rows: RowSums,
+}
+
+impl<P: Plane> Scratch<P> {
+    pub(super) fn new() -> Self {
+        Self {
+            xi: Vec::new(),
+            ai: Vec::new(),
+            val: Vec::new(),
+            full: Vec::new(),
+            win: uniform::Windows::default(),
+            hx: Vec::new(),
+            ha: Vec::new(),
+            rows: RowSums::default(),
+        }
+    }
+
+    /// Layer `l`'s input planes over the rectangle `(x0, y0, bw, bh)`.
+    pub(super) fn input(
+        &mut self,
+        img: &DepthImage<u32>,
+        plan: &LayerPlan,
+        l: usize,
+        (x0, y0, bw, bh): (usize, usize, usize, usize),
+    ) {
+        self.xi.clear();
+        self.ai.clear();
+        self.val.clear();
+        for y in y0..y0 + bh {
+            let r = y * img.width + x0..y * img.width + x0 + bw;
+            let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
+            let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
+            for x in 0..bw {
+                let s = share(plan, key[x], cov[x], idx[x], l, img.n2);
+                self.xi.push(P::put(u64::from(value[x]) * u64::from(s)));
+                self.ai.push(P::put(u64::from(s)));
+                self.val.push(value[x]);
+            }
+        }
+    }
+}
