@@ -100,32 +100,15 @@ fn excess(
     max_code: f64,
     horizontal: bool,
 ) -> Vec<[Option<f64>; 2]> {
-    let (l, hw) = (SIDE, HALF_WIDTH);
     let (w, h) = (ideal.width, ideal.height);
     let (si, span) = (&ideal.lum_integral, &ideal.span[usize::from(!horizontal)]);
     (0..h * w)
         .into_par_iter()
         .map(|p| {
             let (x, y) = (p % w, p / w);
-            // Along-axis coordinate a, across-axis b.
-            let (a, b, na, nb) = if horizontal {
-                (x, y, w, h)
-            } else {
-                (y, x, h, w)
-            };
-            if a + 1 < l || a + l >= na || b < hw || b + hw >= nb {
+            let Some((ra, rb)) = step_windows(x, y, (w, h), horizontal) else {
                 return [None; 2];
-            }
-            let (a0, a1, a2) = (a + 1 - l, a + 1, a + 1 + l);
-            let (b0, b1) = (b - hw, b + hw + 1);
-            let r = |a0: usize, a1: usize| {
-                if horizontal {
-                    (a0, b0, a1, b1)
-                } else {
-                    (b0, a0, b1, a1)
-                }
             };
-            let (ra, rb) = (r(a0, a1), r(a1, a2));
             // Smoothness of the ideal signal over the whole window, in DAC codes (scaling
             // commutes with min and max: this is the span of the ideal codes themselves).
             let (lo, hi) = span[ra.1 * w + ra.0];
@@ -312,24 +295,9 @@ pub fn contours_banded(
                 [true, false].map(|horizontal| {
                     (0..w)
                         .map(|x| {
-                            let (a, b, na, nb) = if horizontal {
-                                (x, y, w, h)
-                            } else {
-                                (y, x, h, w)
-                            };
-                            if a + 1 < l || a + l >= na || b < hw || b + hw >= nb {
+                            let Some((ra, rb)) = step_windows(x, y, (w, h), horizontal) else {
                                 return [None; 2];
-                            }
-                            let (a0, a1, a2) = (a + 1 - l, a + 1, a + 1 + l);
-                            let (b0, b1) = (b - hw, b + hw + 1);
-                            let r = |a0: usize, a1: usize| {
-                                if horizontal {
-                                    (a0, b0, a1, b1)
-                                } else {
-                                    (b0, a0, b1, a1)
-                                }
                             };
-                            let (ra, rb) = (r(a0, a1), r(a1, a2));
                             // The span over the 2L x (2W+1) window, along then across.
                             let (along, across) = if horizontal { (1, w) } else { (w, 1) };
                             let q = ra.1 * w + ra.0;
@@ -500,4 +468,37 @@ pub fn banding_image(dac: &[u16], map: &[u8], max_code: u32) -> Vec<u8> {
             _ => (c as u32 * 100 / max_code.max(1)) as u8,
         })
         .collect()
+}
+
+/// A window `(x0, y0, x1, y1)`, exclusive.
+type Rect = (usize, usize, usize, usize);
+
+/// The two `L`-pixel windows either side of pixel `(x, y)` along an axis (`horizontal`: along
+/// x), `2W + 1` pixels across; `None` where they leave the `w x h` image.
+fn step_windows(
+    x: usize,
+    y: usize,
+    (w, h): (usize, usize),
+    horizontal: bool,
+) -> Option<(Rect, Rect)> {
+    let (l, hw) = (SIDE, HALF_WIDTH);
+    // Along-axis coordinate a, across-axis b.
+    let (a, b, na, nb) = if horizontal {
+        (x, y, w, h)
+    } else {
+        (y, x, h, w)
+    };
+    if a + 1 < l || a + l >= na || b < hw || b + hw >= nb {
+        return None;
+    }
+    let (a0, a1, a2) = (a + 1 - l, a + 1, a + 1 + l);
+    let (b0, b1) = (b - hw, b + hw + 1);
+    let r = |a0: usize, a1: usize| {
+        if horizontal {
+            (a0, b0, a1, b1)
+        } else {
+            (b0, a0, b1, a1)
+        }
+    };
+    Some((r(a0, a1), r(a1, a2)))
 }
