@@ -11,7 +11,7 @@
 use criterion::{Criterion, criterion_group};
 use igemu::config::{DitherCfg, DitherKind};
 use igemu::fixed::Quant;
-use igemu::stage::dither::{Dither, Mask, apply_ordered_portable, ordered_code};
+use igemu::stage::dither::{Dither, Mask, Run, apply_ordered_with, ordered_code};
 use igemu::stage::gamma::{GammaSpec, extended_lut, lookup, lookup_block, lookup_block_portable};
 use std::hint::black_box;
 use std::time::Instant;
@@ -59,10 +59,10 @@ fn per_value(d: &Data, m: &Mask, x: &mut [u32], out: &mut [u32]) -> u64 {
 }
 
 /// The serial kernels in their portable build: the block lookup, then the row-wise Bayer 8x8
-/// dither (frame 0, as [`Dither::apply_serial`] runs it).
+/// dither (frame 0, as [`Dither::apply_with`] with `Run::Serial` runs it).
 fn portable(d: &Data, m: &Mask, x: &mut [u32], out: &mut [u32]) -> u64 {
     lookup_block_portable(&d.lut, black_box(&d.acc), 0, x);
-    apply_ordered_portable(x, W, F, 255, m, 0, out)
+    apply_ordered_with(x, W, F, 255, m, 0, out, Run::Portable)
 }
 
 fn bench(c: &mut Criterion) {
@@ -83,7 +83,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("serial/lut+bayer8", |b| {
         b.iter(|| {
             lookup_block(&d.lut, black_box(&d.acc), 0, &mut x);
-            b8.apply_serial(&x, W, H, F, 255, &mut out)
+            b8.apply_with(&x, (W, H), F, 255, &mut out, Run::Serial)
         })
     });
     for (name, kind) in [
@@ -148,7 +148,7 @@ fn ratios() {
         });
         time(2, &mut || {
             lookup_block(&d.lut, black_box(&d.acc), 0, &mut x);
-            black_box(b8.apply_serial(&x, W, H, F, 255, &mut out));
+            black_box(b8.apply_with(&x, (W, H), F, 255, &mut out, Run::Serial));
         });
         time(3, &mut || {
             black_box(per_value(&d, &m, &mut x, &mut out));

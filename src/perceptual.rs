@@ -49,6 +49,19 @@ pub struct ContourReport {
     pub contour_steps_reference: u64,
 }
 
+impl ContourReport {
+    /// Nothing counted yet, with the metric's settings (`delta` the display's Weber
+    /// threshold).
+    fn empty(delta: f64) -> Self {
+        Self {
+            delta,
+            window: [SIDE, 2 * HALF_WIDTH + 1],
+            smooth_max_codes: SMOOTH_CODES,
+            ..Default::default()
+        }
+    }
+}
+
 /// The per-pixel result: contour mask of the fixed output.
 pub struct Contours {
     /// The report.
@@ -268,12 +281,7 @@ pub fn contours_banded(
     let table = display.luminance_table();
     let thr = 1.0 + display.weber;
     let max_code = display.max_code;
-    let mut rep = ContourReport {
-        delta: display.weber,
-        window: [SIDE, 2 * HALF_WIDTH + 1],
-        smooth_max_codes: SMOOTH_CODES,
-        ..Default::default()
-    };
+    let mut rep = ContourReport::empty(display.weber);
     let mut map = vec![0u8; w * h];
     let mut si = Integral::new(w);
     let mut sf = Integral::new(w);
@@ -417,12 +425,7 @@ pub fn contours_whole(
     let sr = integral(|i| table[dac_ref[i] as usize], w, h);
     // Excess steps are kept as luminance-ratio factors >= 1 (see `excess`).
     let thr = 1.0 + display.weber;
-    let mut rep = ContourReport {
-        delta: display.weber,
-        window: [SIDE, 2 * HALF_WIDTH + 1],
-        smooth_max_codes: SMOOTH_CODES,
-        ..Default::default()
-    };
+    let mut rep = ContourReport::empty(display.weber);
     let mut map = vec![0u8; w * h];
     for horizontal in [true, false] {
         let ex = excess([&sf, &sr], ideal, display.max_code, horizontal);

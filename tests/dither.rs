@@ -473,9 +473,7 @@ mod kernels {
     use igemu::fixed::SignalStats;
     use igemu::scene::Scene;
     use igemu::stage::StageId;
-    use igemu::stage::dither::{
-        apply_ordered, apply_ordered_f64, apply_ordered_portable, apply_ordered_serial,
-    };
+    use igemu::stage::dither::{Run, apply_ordered, apply_ordered_f64, apply_ordered_with};
     use proptest::prelude::*;
     use std::sync::OnceLock;
 
@@ -607,11 +605,11 @@ mod kernels {
             prop_assert_eq!(apply_ordered(&x, width, s, omax, m, frame, &mut out), sat);
             prop_assert_eq!(&out, &want);
             let mut out = vec![7u32; len];
-            prop_assert_eq!(apply_ordered_serial(&x, width, s, omax, m, frame, &mut out), sat);
+            prop_assert_eq!(apply_ordered_with(&x, width, s, omax, m, frame, &mut out, Run::Serial), sat);
             prop_assert_eq!(&out, &want);
             // The portable build (the calls above take the AVX2 build where the CPU has it).
             let mut out = vec![7u32; len];
-            prop_assert_eq!(apply_ordered_portable(&x, width, s, omax, m, frame, &mut out), sat);
+            prop_assert_eq!(apply_ordered_with(&x, width, s, omax, m, frame, &mut out, Run::Portable), sat);
             prop_assert_eq!(&out, &want);
             // The float reference on the same values as reals, and on odd reals.
             let mut v: Vec<f64> = x.iter().map(|&c| c as f64 / (1u64 << s.min(31)) as f64).collect();
@@ -646,7 +644,7 @@ mod kernels {
             for serial in [false, true] {
                 let mut out = vec![0u32; x.len()];
                 let st = if serial {
-                    d.apply_serial(&x, width, height, s, omax, &mut out)
+                    d.apply_with(&x, (width, height), s, omax, &mut out, Run::Serial)
                 } else {
                     d.apply(&x, width, height, s, omax, &mut out)
                 };
@@ -690,7 +688,10 @@ mod kernels {
                 assert_eq!(out, want);
             }
             let mut out = vec![0u32; x.len()];
-            assert_eq!(apply_ordered_portable(&x, w, 4, 255, m, 3, &mut out), sat);
+            assert_eq!(
+                apply_ordered_with(&x, w, 4, 255, m, 3, &mut out, Run::Portable),
+                sat
+            );
             assert_eq!(out, want);
             assert!(sat > 0);
         }

@@ -23,24 +23,8 @@ fn params() -> DofCfg {
     HwConfig::default_config().dof
 }
 
-/// A synthetic lens: sigma = 12 (z - 0.5) behind 0.5, 12 (z - 0.4) in front of 0.4 (pixels).
 fn lens() -> LensMap {
-    LensMap {
-        form: SigmaForm::Affine,
-        k: 12.0,
-        inv_focus: 0.55,
-        deep: 0.0,
-        inv_near: 1.0,
-        inv_far: 0.0,
-        rom_bits: 10,
-        rom: Vec::new().into(),
-        g: 12.0,
-        z_far_edge: 0.5,
-        z_near_edge: 0.4,
-        z_inf: 1.0,
-        z_frac: ZF,
-        coc_px: 1.0,
-    }
+    common::affine_lens(ZF)
 }
 
 fn key(z: f64) -> u32 {

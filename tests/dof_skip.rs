@@ -4,7 +4,9 @@
 //! fixed and float, bit for bit with the same work counts, on the embedded scenes, the depth
 //! ramp and random depth images; and the hardware option `dof.skip_uniform_tiles`.
 
-use igemu::config::{DofCfg, HwConfig, SigmaForm};
+mod common;
+
+use igemu::config::{DofCfg, HwConfig};
 use igemu::fixed::{Overflow, QFormat};
 use igemu::pipeline;
 use igemu::scene::Scene;
@@ -99,24 +101,8 @@ fn depth_ramp_skip_is_exact() {
     check_scene(&Scene::load(path).unwrap());
 }
 
-/// A synthetic lens: sigma = 12 (z - 0.5) behind 0.5, 12 (z - 0.4) in front of 0.4 (pixels).
 fn lens() -> LensMap {
-    LensMap {
-        form: SigmaForm::Affine,
-        k: 12.0,
-        inv_focus: 0.55,
-        deep: 0.0,
-        inv_near: 1.0,
-        inv_far: 0.0,
-        rom_bits: 10,
-        rom: Vec::new().into(),
-        g: 12.0,
-        z_far_edge: 0.5,
-        z_near_edge: 0.4,
-        z_inf: 1.0,
-        z_frac: 16,
-        coc_px: 1.0,
-    }
+    common::affine_lens(16)
 }
 
 /// A random depth image of flat blocks (so that uniform windows occur), with background,

@@ -1,4 +1,5 @@
-//! Shared helpers of the integration tests: scenes built from TOML text, seeded randomness.
+//! Shared helpers of the integration tests: scenes built from TOML text, seeded randomness,
+//! a synthetic lens.
 #![allow(dead_code)]
 
 use igemu::config::HwConfig;
@@ -116,4 +117,25 @@ pub fn steps_through(
     let plan = igemu::pipeline::plan::build(scene, hw).unwrap_or_else(|e| panic!("{e}"));
     igemu::pipeline::run::run(scene, hw, &plan, opts, None, Some(last))
         .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A synthetic depth-of-field lens (affine sigma, `z_frac` fraction bits in the depth
+/// codes): sigma = 12 (z - 0.5) behind 0.5, 12 (z - 0.4) in front of 0.4 (pixels).
+pub fn affine_lens(z_frac: u32) -> igemu::stage::dof::LensMap {
+    igemu::stage::dof::LensMap {
+        form: igemu::config::SigmaForm::Affine,
+        k: 12.0,
+        inv_focus: 0.55,
+        deep: 0.0,
+        inv_near: 1.0,
+        inv_far: 0.0,
+        rom_bits: 10,
+        rom: Vec::new().into(),
+        g: 12.0,
+        z_far_edge: 0.5,
+        z_near_edge: 0.4,
+        z_inf: 1.0,
+        z_frac,
+        coc_px: 1.0,
+    }
 }

@@ -135,12 +135,16 @@ mod simd {
     }
 }
 
-/// How [`ordered`] runs: bands in parallel, or serially on the caller (with or without the
-/// AVX2 build).
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Run {
+/// How the ordered dither runs: bands in parallel, or serially on the caller (with or
+/// without the AVX2 build); the codes and the count are the same.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Run {
+    /// Bands of rows on the rayon threads (the stage's way).
     Parallel,
+    /// The calling thread only.
     Serial,
+    /// The calling thread, the portable build only (baseline x86-64 on that target), for
+    /// comparing the two builds.
     Portable,
 }
 
@@ -157,38 +161,12 @@ pub fn apply_ordered(
     frame: u32,
     out: &mut [u32],
 ) -> u64 {
-    ordered(x, width, s, omax, mask, frame, out, Run::Parallel)
+    apply_ordered_with(x, width, s, omax, mask, frame, out, Run::Parallel)
 }
 
-/// [`apply_ordered`] on the calling thread only (the same codes and count).
-pub fn apply_ordered_serial(
-    x: &[u32],
-    width: u32,
-    s: u32,
-    omax: u32,
-    mask: &Mask,
-    frame: u32,
-    out: &mut [u32],
-) -> u64 {
-    ordered(x, width, s, omax, mask, frame, out, Run::Serial)
-}
-
-/// [`apply_ordered_serial`] in the portable build only (baseline x86-64 on that target): the
-/// same codes and count, for comparing the two builds.
-pub fn apply_ordered_portable(
-    x: &[u32],
-    width: u32,
-    s: u32,
-    omax: u32,
-    mask: &Mask,
-    frame: u32,
-    out: &mut [u32],
-) -> u64 {
-    ordered(x, width, s, omax, mask, frame, out, Run::Portable)
-}
-
+/// [`apply_ordered`] run as `run` says (the same codes and count).
 #[allow(clippy::too_many_arguments)]
-fn ordered(
+pub fn apply_ordered_with(
     x: &[u32],
     width: u32,
     s: u32,

@@ -3,7 +3,7 @@
 
 use super::diffusion::{FsParams, floyd_steinberg, floyd_steinberg_f64};
 use super::mask::Mask;
-use super::ordered::{apply_ordered, apply_ordered_f64, apply_ordered_serial, ordered_code};
+use super::ordered::{Run, apply_ordered_f64, apply_ordered_with, ordered_code};
 use crate::config::DitherCfg;
 use crate::fixed::{QFormat, SignalStats};
 use crate::stage::{Cost, MemImage, Memory, Unit};
@@ -44,9 +44,23 @@ impl Dither {
         omax: u32,
         out: &mut [u32],
     ) -> SignalStats {
+        self.apply_with(x, (width, height), s, omax, out, Run::Parallel)
+    }
+
+    /// [`Dither::apply`] run as `run` says (error diffusion is serial anyway): the same codes
+    /// and statistics.
+    pub fn apply_with(
+        &self,
+        x: &[u32],
+        (width, height): (u32, u32),
+        s: u32,
+        omax: u32,
+        out: &mut [u32],
+        run: Run,
+    ) -> SignalStats {
         match &self.mask {
             Some(m) => {
-                let sat = apply_ordered(x, width, s, omax, m, self.frame(), out);
+                let sat = apply_ordered_with(x, width, s, omax, m, self.frame(), out, run);
                 ordered_stats(omax, sat)
             }
             None => floyd_steinberg(
@@ -61,25 +75,6 @@ impl Dither {
                 },
                 out,
             ),
-        }
-    }
-
-    /// [`Dither::apply`] on the calling thread only (the same codes and statistics).
-    pub fn apply_serial(
-        &self,
-        x: &[u32],
-        width: u32,
-        height: u32,
-        s: u32,
-        omax: u32,
-        out: &mut [u32],
-    ) -> SignalStats {
-        match &self.mask {
-            Some(m) => {
-                let sat = apply_ordered_serial(x, width, s, omax, m, self.frame(), out);
-                ordered_stats(omax, sat)
-            }
-            None => self.apply(x, width, height, s, omax, out),
         }
     }
 
