@@ -4,7 +4,8 @@
 
 use super::kernel::Kernel;
 use super::points::{PointFrags, point_weights};
-use super::window::{ProductStats, WindowSums};
+use super::span::{self, Build, Dst, Scratch, Span};
+use super::window::{ProductStats, WindowSums, sums_fit_u32};
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, SignalStats, round_shift_i64};
 use crate::stage::Region;
@@ -75,7 +76,7 @@ impl AccParams {
 
     /// [`AccParams::product`] recording into a row's [`ProductStats`] (the same values).
     #[inline]
-    fn product_row(&self, sum: i64, stats: &mut ProductStats) -> i64 {
+    pub(super) fn product_row(&self, sum: i64, stats: &mut ProductStats) -> i64 {
         let sh = self.shift();
         if sh <= 0 {
             let v = (sum as i128) << (-sh);
@@ -90,7 +91,7 @@ impl AccParams {
 
     /// Frame-memory add with the overflow mode.
     #[inline]
-    fn add(&self, acc: i64, part: i64, overflows: &mut u64) -> Result<i64> {
+    pub(super) fn add(&self, acc: i64, part: i64, overflows: &mut u64) -> Result<i64> {
         let q = self.frame.handle_overflow(acc as i128 + part as i128);
         if q.overflow {
             *overflows += 1;
@@ -145,7 +146,7 @@ pub fn own_depth_coverage(s: &Samples, k: &Kernel, window: usize, sw: usize) -> 
 
 /// [`own_depth_coverage`] of the `N x N` samples from buffer index `own0`.
 #[inline(always)]
-fn own_n<const N: usize>(s: &Samples, own0: usize, sw: usize) -> (u32, u16) {
+pub(super) fn own_n<const N: usize>(s: &Samples, own0: usize, sw: usize) -> (u32, u16) {
     let (mut zmin, mut cov) = (u32::MAX, 0u16);
     for j in 0..N {
         let row = own0 + j * sw;
@@ -160,13 +161,20 @@ fn own_n<const N: usize>(s: &Samples, own0: usize, sw: usize) -> (u32, u16) {
     (zmin, cov)
 }
 
-struct RowOut {
-    acc: Vec<u32>,
-    depth: Vec<u32>,
-    cov: Vec<u16>,
-    stats: SignalStats,
-    work: AccWork,
-    tile_rmw: Vec<u64>,
+/// One pixel row's counts, merged in row order (its codes go straight to the frame).
+pub(super) struct RowOut {
+    pub stats: SignalStats,
+    pub work: AccWork,
+    pub tile_rmw: Vec<u64>,
+}
+
+/// The region's part of each of its rows of a `w`-wide frame plane.
+fn region_rows<'a, T>(v: &'a mut [T], region: &Region, w: usize) -> Vec<&'a mut [T]> {
+    let (x0, x1) = (region.x0 as usize, region.x1 as usize);
+    v[region.y0 as usize * w..region.y1 as usize * w]
+        .chunks_mut(w)
+        .map(|r| &mut r[x0..x1])
+        .collect()
 }
 
 /// Fixed model: accumulates every pixel of `region`; the rest is background.
@@ -195,6 +203,22 @@ pub fn accumulate_tiles(
     bg_i: u32,
     size: (u32, u32),
 ) -> Result<(Frame, AccWork, Vec<SignalStats>, Vec<u64>)> {
+    accumulate_build(s, region, tiles, points, p, bg_i, size, None)
+}
+
+/// [`accumulate_tiles`], with the window kernel's build forced by `force` (tests compare
+/// every build; `None`: the word the data allows and AVX2 when the CPU has it).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn accumulate_build(
+    s: &Samples,
+    region: &Region,
+    tiles: Option<&crate::stage::Tiles>,
+    points: &[PointFrags<u32>],
+    p: &AccParams,
+    bg_i: u32,
+    size: (u32, u32),
+    force: Option<Build>,
+) -> Result<(Frame, AccWork, Vec<SignalStats>, Vec<u64>)> {
     let (width, height) = size;
     let npix = width as usize * height as usize;
     let bg = p.background_code(bg_i)?;
@@ -206,75 +230,69 @@ pub fn accumulate_tiles(
         coverage: vec![0; npix],
     };
     let k = &p.kernel;
-    let size_w = k.size;
-    let sw = s.reg.width();
     let template = SignalStats::new("accumulate.product", p.frame.format);
-    let rows: Vec<Result<RowOut>> = (region.y0..region.y1)
+    // The word of the window sums, from the largest intensity code in the buffer.
+    let imax = s.i.par_iter().copied().max().unwrap_or(0);
+    let build = force.unwrap_or(Build {
+        narrow: sums_fit_u32(k, imax),
+        avx2: span::has_avx2(),
+    });
+    let w = width as usize;
+    let acc_rows = region_rows(&mut frame.acc, region, w);
+    let depth_rows = region_rows(&mut frame.depth, region, w);
+    let cov_rows = region_rows(&mut frame.coverage, region, w);
+    let rows: Vec<Result<RowOut>> = acc_rows
         .into_par_iter()
-        .map(|py| {
-            let len = (region.x1 - region.x0) as usize;
+        .zip(depth_rows)
+        .zip(cov_rows)
+        .enumerate()
+        .map(|(j, ((acc_row, depth_row), cov_row))| {
+            let py = region.y0 + j as u32;
             let mut out = RowOut {
-                acc: Vec::with_capacity(len),
-                depth: Vec::with_capacity(len),
-                cov: Vec::with_capacity(len),
                 stats: SignalStats::new("accumulate.product", p.frame.format),
                 work: AccWork::default(),
                 tile_rmw: vec![0; tiles.map_or(0, |t| t.cols as usize)],
             };
-            let mut stats = ProductStats::new();
-            let mut win = WindowSums::new(k);
-            let mut ids = Vec::new();
+            let mut sc = Scratch {
+                win: WindowSums::new(k),
+                ids: Vec::new(),
+                stats: ProductStats::new(),
+            };
             let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
             // Spans of pixels in one tile column: binned or not (no division per pixel).
-            let spans: Vec<(u32, u32, Option<usize>, bool)> = match tiles {
-                None => vec![(region.x0, region.x1, None, true)],
+            // Untouched tiles keep the background the frame starts with.
+            let spans: Vec<(u32, u32, Option<usize>)> = match tiles {
+                None => vec![(region.x0, region.x1, None)],
                 Some(t) => {
                     let row0 = (py / t.size * t.cols) as usize;
                     (region.x0 / t.size..region.x1.div_ceil(t.size))
+                        .filter(|&tc| t.touched[row0 + tc as usize])
                         .map(|tc| {
                             let a = (tc * t.size).max(region.x0);
                             let b = ((tc + 1) * t.size).min(region.x1);
-                            (a, b, Some(tc as usize), t.touched[row0 + tc as usize])
+                            (a, b, Some(tc as usize))
                         })
                         .collect()
                 }
             };
-            for (xa, xb, tc, touched) in spans {
-                if !touched {
-                    let m = (xb - xa) as usize;
-                    out.acc.extend(std::iter::repeat_n(bg, m));
-                    out.depth.extend(std::iter::repeat_n(u32::MAX, m));
-                    out.cov.extend(std::iter::repeat_n(0, m));
-                    continue;
-                }
-                let c0 = |px: u32| (px as i64 * k.n as i64 - k.off - s.reg.c0) as usize;
-                let pixels = (xb - xa) as usize;
-                win.block_ids(&s.prim, k, r0 * sw + c0(xa), sw, pixels, &mut ids);
-                let cols = pixels + k.size / k.n as usize - 1;
-                for px in xa..xb {
-                    out.work.pixels += 1;
-                    let base = r0 * sw + c0(px);
-                    let g = (px - xa) as usize;
-                    win.sum(&s.prim, &s.i, k, base, sw, &ids, g, cols);
-                    out.work.macs += (size_w * size_w) as u64;
-                    let mut acc = 0i64;
-                    for &(_, sum) in &win.frags {
-                        let part = p.product_row(sum, &mut stats);
-                        acc = p.add(acc, part, &mut out.work.overflows)?;
-                    }
-                    let nf = win.frags.len() as u64;
-                    out.work.fragments += nf;
-                    if let Some(c) = tc {
-                        out.tile_rmw[c] += nf;
-                    }
-                    // Depth and coverage of the pixel's own samples.
-                    let (zmin, cov) = own_depth_coverage(s, k, base, sw);
-                    out.acc.push(acc as u32);
-                    out.depth.push(zmin);
-                    out.cov.push(cov);
-                }
+            for (xa, xb, tc) in spans {
+                let sp = Span {
+                    s,
+                    p,
+                    r0,
+                    xa,
+                    xb,
+                    tc,
+                };
+                let (a, b) = ((xa - region.x0) as usize, (xb - region.x0) as usize);
+                let dst = Dst {
+                    acc: &mut acc_row[a..b],
+                    depth: &mut depth_row[a..b],
+                    cov: &mut cov_row[a..b],
+                };
+                span::run(&sp, &mut sc, dst, &mut out, build)?;
             }
-            out.stats = stats.into_stats(&template);
+            out.stats = sc.stats.into_stats(&template);
             Ok(out)
         })
         .collect();
@@ -290,11 +308,6 @@ pub fn accumulate_tiles(
                 tile_rmw[row0 + c] += v;
             }
         }
-        let base = py as usize * width as usize + region.x0 as usize;
-        let len = r.acc.len();
-        frame.acc[base..base + len].copy_from_slice(&r.acc);
-        frame.depth[base..base + len].copy_from_slice(&r.depth);
-        frame.coverage[base..base + len].copy_from_slice(&r.cov);
         stats.merge(&r.stats);
         work.pixels += r.work.pixels;
         work.macs += r.work.macs;
@@ -314,9 +327,11 @@ pub fn accumulate_tiles(
             }
         }
     }
-    for &a in &frame.acc {
-        frame_stats.record_code(a as i128);
-    }
+    let (lo, hi) = frame
+        .acc
+        .iter()
+        .fold((u32::MAX, 0), |(lo, hi), &a| (lo.min(a), hi.max(a)));
+    frame_stats.record_range(frame.acc.len() as u64, lo.into(), hi.into());
     frame_stats.add_overflows(work.overflows);
     Ok((frame, work, vec![stats, frame_stats], tile_rmw))
 }

@@ -18,13 +18,14 @@
 //! Files: `kernel` (the quantised [`Kernel`]), `fixed` (the fixed model into the frame
 //! memory), `points` (light points and the sample region), `float` (the float reference),
 //! `cost` (the stage's hardware cost), `stage` (the stage contract), `window` (the
-//! per-pixel window sums of the fixed model).
+//! per-pixel window sums of the fixed model), `span` (the fixed model's pixel loop).
 
 mod cost;
 mod fixed;
 mod float;
 mod kernel;
 mod points;
+mod span;
 mod stage;
 mod window;
 

@@ -1,117 +1,101 @@
 //! The per-pixel window kernel of the fixed model: the exact sums `sum w * I` of each
 //! primitive over a pixel's filter window, in primitive-id order, without allocation.
 //!
-//! The window is `base x base` blocks of `n x n` samples. A block whose samples all belong
-//! to one primitive (most blocks: a block crosses an edge only near it) is one dot product
-//! added to that primitive's slot; a block that crosses an edge adds its samples one by one. The slots are kept in a fixed scratch
-//! reused for every pixel of a row, and sorted by id at the end (they are few). The sums
-//! are exact integers, so the order of the additions does not change them: the result is
-//! the same as grouping every sample by primitive.
+//! The window is `base x base` blocks of `n x n` samples; which primitive owns each block
+//! (or that it crosses an edge) is found once per block of a pixel row
+//! ([`block_ids_n`]). A window whose blocks all belong to one primitive (most windows) is
+//! one dot product. Otherwise one pass over the window finds its smallest primitive id,
+//! and each further pass sums one primitive's samples (the dot product masked to them) and
+//! finds the next larger id, so the primitives come out in id order. The sums are exact
+//! integers, so this is the same as grouping every sample by primitive. Every pass runs
+//! branch-free over a window of constant size (`n` and the base are const parameters) in a
+//! [`Word`] that provably holds the sums, so the compiler vectorises it.
 
 use super::kernel::Kernel;
 use crate::fixed::SignalStats;
 
+/// The word the window sums are computed in: `u32` when every sum provably fits (the
+/// kernel's weights, which sum to `2^f`, times the largest intensity code, below `2^32`),
+/// else `u64`. Exact either way, so the arithmetic wraps only where it cannot overflow.
+pub(super) trait Word: Copy + Default {
+    /// `w * I`.
+    fn prod(w: u32, i: u32) -> Self;
+    /// `self + o`.
+    fn add(self, o: Self) -> Self;
+    /// `self` where `on`, else zero.
+    fn keep(self, on: bool) -> Self;
+    /// The sum as the rounding's input.
+    fn to_i64(self) -> i64;
+}
+
+/// `Word` for an unsigned type at least 32 bits wide (`w * I` of two `u32` is exact in
+/// `u64`; in `u32` only where the caller proved it fits, see [`sums_fit_u32`]).
+macro_rules! word {
+    ($t:ty) => {
+        impl Word for $t {
+            #[inline(always)]
+            fn prod(w: u32, i: u32) -> Self {
+                <$t>::from(w).wrapping_mul(<$t>::from(i))
+            }
+            #[inline(always)]
+            fn add(self, o: Self) -> Self {
+                self.wrapping_add(o)
+            }
+            #[inline(always)]
+            fn keep(self, on: bool) -> Self {
+                self & <$t>::from(on).wrapping_neg()
+            }
+            #[inline(always)]
+            fn to_i64(self) -> i64 {
+                self as i64
+            }
+        }
+    };
+}
+word!(u32);
+word!(u64);
+
+/// Whether the window sums of kernel `k` over intensity codes up to `imax` fit a `u32`.
+pub(super) fn sums_fit_u32(k: &Kernel, imax: u32) -> bool {
+    let wsum: u64 = k.w.iter().map(|&w| u64::from(w)).sum();
+    wsum.checked_mul(u64::from(imax))
+        .is_some_and(|m| m <= u64::from(u32::MAX))
+}
+
 /// Scratch of one pixel's per-primitive sums (reused across pixels).
 pub(super) struct WindowSums {
-    /// `(primitive id, sum of w * I)`, sorted by id after [`WindowSums::sum`].
+    /// `(primitive id, sum of w * I)`, sorted by id after [`WindowSums::sum_nb`].
     pub frags: Vec<(u32, i64)>,
-    /// Per `n x n` block of the kernel (row-major): whether any of its weights is non-zero
-    /// (a primitive gets a fragment only from samples of non-zero weight).
-    block_nz: Vec<bool>,
-    /// The kernel's weights block by block (each block's `n x n` weights row-major).
-    wb: Vec<u32>,
+    /// Per kernel weight (row-major): all ones where it is non-zero (a primitive gets a
+    /// fragment only from samples of non-zero weight), else zero.
+    nz: Vec<u32>,
 }
 
 impl WindowSums {
     /// Scratch for kernel `k`.
     pub fn new(k: &Kernel) -> Self {
-        let n = k.n as usize;
-        let blocks = k.size / n;
-        let mut wb = Vec::with_capacity(k.size * k.size);
-        for b in 0..blocks * blocks {
-            let (by, bx) = (b / blocks, b % blocks);
-            for e in 0..n * n {
-                wb.push(k.w[(by * n + e / n) * k.size + bx * n + e % n]);
-            }
-        }
         Self {
             frags: Vec::with_capacity(k.size * k.size),
-            block_nz: block_nz(k),
-            wb,
-        }
-    }
-
-    /// The slot of primitive `id`, created with a zero sum when new.
-    #[inline]
-    fn slot(&mut self, id: u32, last: &mut usize) -> usize {
-        if *last < self.frags.len() && self.frags[*last].0 == id {
-            return *last;
-        }
-        let at = match self.frags.iter().position(|f| f.0 == id) {
-            Some(x) => x,
-            None => {
-                self.frags.push((id, 0));
-                self.frags.len() - 1
-            }
-        };
-        *last = at;
-        at
-    }
-
-    /// The ids of the `n x n` blocks of the windows of pixels `xa..xb` of one pixel row:
-    /// `ids[by * cols + g]` is the primitive owning all samples of block row `by`, block
-    /// column `g` (pixel `xa + g - bx` sees it as its block `bx`), or [`MIXED`] when the
-    /// block crosses an edge. `base` is the buffer index of pixel `xa`'s window.
-    pub fn block_ids(
-        &self,
-        prim: &[u32],
-        k: &Kernel,
-        base: usize,
-        sw: usize,
-        pixels: usize,
-        ids: &mut Vec<u64>,
-    ) {
-        match k.n {
-            1 => block_ids_n::<1>(prim, k, base, sw, pixels, ids),
-            2 => block_ids_n::<2>(prim, k, base, sw, pixels, ids),
-            4 => block_ids_n::<4>(prim, k, base, sw, pixels, ids),
-            _ => block_ids_n::<8>(prim, k, base, sw, pixels, ids),
+            nz: k
+                .w
+                .iter()
+                .map(|&w| if w != 0 { u32::MAX } else { 0 })
+                .collect(),
         }
     }
 
     /// Sums `w * I` per primitive over the window whose first sample is at buffer index
     /// `base` (row stride `sw`) into `self.frags`, sorted by primitive id: one entry per
-    /// primitive with at least one sample of non-zero weight. `ids` are the block ids of
-    /// [`WindowSums::block_ids`], `g` the pixel's offset in them and `cols` their columns.
-    #[inline]
-    #[allow(clippy::too_many_arguments)]
-    pub fn sum(
-        &mut self,
-        prim: &[u32],
-        inten: &[u32],
-        k: &Kernel,
-        base: usize,
-        sw: usize,
-        ids: &[u64],
-        g: usize,
-        cols: usize,
-    ) {
-        match k.n {
-            1 => self.sum_n::<1>(prim, inten, k, base, sw, ids, g, cols),
-            2 => self.sum_n::<2>(prim, inten, k, base, sw, ids, g, cols),
-            4 => self.sum_n::<4>(prim, inten, k, base, sw, ids, g, cols),
-            _ => self.sum_n::<8>(prim, inten, k, base, sw, ids, g, cols),
-        }
-    }
-
-    /// [`WindowSums::sum`] for `n = N` (`raster.samples` is 1, 2, 4 or 8).
+    /// primitive with at least one sample of non-zero weight. `n = N`, the window is
+    /// `B x B` blocks, `kw` the kernel's weights (row-major); `ids` are the block ids of
+    /// [`block_ids_n`], `g` the pixel's offset in them and `cols` their columns.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn sum_n<const N: usize>(
+    pub fn sum_nb<const N: usize, const B: usize, W: Word>(
         &mut self,
         prim: &[u32],
         inten: &[u32],
-        k: &Kernel,
+        kw: &[u32],
         base: usize,
         sw: usize,
         ids: &[u64],
@@ -119,136 +103,91 @@ impl WindowSums {
         cols: usize,
     ) {
         self.frags.clear();
-        let size = k.size;
-        let blocks = size / N;
-        // One primitive owns the whole window (most pixels): one dot product.
+        let w = Window::<N, B> {
+            prim,
+            inten,
+            kw,
+            nz: &self.nz,
+            base,
+            sw,
+        };
         let first = ids[g];
-        let uniform = first != MIXED
-            && (0..blocks).all(|by| {
-                ids[by * cols + g..by * cols + g + blocks]
-                    .iter()
-                    .all(|&b| b == first)
-            });
-        if uniform {
-            let mut dot = 0u64;
-            for j in 0..size {
-                let row = base + j * sw;
-                let is = &inten[row..row + size];
-                let ws = &k.w[j * size..(j + 1) * size];
-                dot += ws
-                    .iter()
-                    .zip(is)
-                    .map(|(&w, &i)| w as u64 * i as u64)
-                    .sum::<u64>();
+        let mut uniform = first != MIXED;
+        for by in 0..B {
+            for bx in 0..B {
+                uniform &= ids[by * cols + g + bx] == first;
             }
-            self.frags.push((first as u32, dot as i64));
+        }
+        if uniform {
+            let (dot, _) = w.pass::<W, false>(0);
+            self.frags.push((first as u32, dot.to_i64()));
             return;
         }
-        let mut last = usize::MAX;
-        for by in 0..blocks {
-            for bx in 0..blocks {
-                let b = by * blocks + bx;
-                let b0 = base + by * N * sw + bx * N;
-                let ws: &[u32] = &self.wb[b * N * N..(b + 1) * N * N];
-                let id = ids[by * cols + g + bx];
-                if id != MIXED {
-                    if self.block_nz[b] {
-                        let mut dot = 0u64;
-                        for sy in 0..N {
-                            let row = b0 + sy * sw;
-                            let is: &[u32; N] = inten[row..row + N].try_into().expect("N samples");
-                            let wr: &[u32; N] =
-                                ws[sy * N..sy * N + N].try_into().expect("N weights");
-                            for t in 0..N {
-                                dot += wr[t] as u64 * is[t] as u64;
-                            }
-                        }
-                        let s = self.slot(id as u32, &mut last);
-                        self.frags[s].1 += dot as i64;
-                    }
-                    continue;
-                }
-                // A block crossing an edge mostly holds two primitives: their sums in one
-                // pass, a slot lookup per primitive, not per sample.
-                if let Some(two) = two_primitives::<N>(prim, inten, ws, b0, sw) {
-                    for (id, sum, nz) in two {
-                        if nz {
-                            let s = self.slot(id, &mut last);
-                            self.frags[s].1 += sum as i64;
-                        }
-                    }
-                    continue;
-                }
-                for sy in 0..N {
-                    let row = b0 + sy * sw;
-                    for t in 0..N {
-                        let w = self.wb[b * N * N + sy * N + t];
-                        if w != 0 {
-                            let s = self.slot(prim[row + t], &mut last);
-                            self.frags[s].1 += w as i64 * inten[row + t] as i64;
-                        }
-                    }
-                }
-            }
-        }
-        // Insertion sort: the slots are few and mostly in order already.
-        for a in 1..self.frags.len() {
-            let mut b = a;
-            while b > 0 && self.frags[b - 1].0 > self.frags[b].0 {
-                self.frags.swap(b - 1, b);
-                b -= 1;
-            }
+        // The window's primitives in increasing id order: each pass sums the current one's
+        // samples and finds the next larger id (every pass reads the whole window,
+        // branch-free).
+        let (_, mut next) = w.pass::<W, false>(0);
+        while let Some(id) = next {
+            let (s, n) = w.pass::<W, true>(id);
+            self.frags.push((id, s.to_i64()));
+            next = n;
         }
     }
 }
 
-/// The sums `w * I` of an `N x N` block (first sample at `b0`, weights `ws`) held by at most
-/// two primitives: per primitive (id, sum, whether a sample of non-zero weight has it; only
-/// those get a fragment); `None` when a third primitive appears.
-#[inline(always)]
-fn two_primitives<const N: usize>(
-    prim: &[u32],
-    inten: &[u32],
-    ws: &[u32],
-    b0: usize,
+/// One pixel's window: `N x N`-sample blocks, `B x B` of them, first sample at `base`.
+struct Window<'a, const N: usize, const B: usize> {
+    prim: &'a [u32],
+    inten: &'a [u32],
+    kw: &'a [u32],
+    nz: &'a [u32],
+    base: usize,
     sw: usize,
-) -> Option<[(u32, u64, bool); 2]> {
-    let first = prim[b0];
-    let mut second: Option<u32> = None;
-    let (mut s1, mut s2, mut nz1, mut nz2) = (0u64, 0u64, false, false);
-    for sy in 0..N {
-        let row = b0 + sy * sw;
-        let ids: &[u32; N] = prim[row..row + N].try_into().expect("N samples");
-        let is: &[u32; N] = inten[row..row + N].try_into().expect("N samples");
-        let wr: &[u32; N] = ws[sy * N..sy * N + N].try_into().expect("N weights");
-        for t in 0..N {
-            let v = wr[t] as u64 * is[t] as u64;
-            if ids[t] == first {
-                s1 += v;
-                nz1 |= wr[t] != 0;
-            } else if second.is_none_or(|s| s == ids[t]) {
-                second = Some(ids[t]);
-                s2 += v;
-                nz2 |= wr[t] != 0;
-            } else {
-                return None;
-            }
-        }
-    }
-    Some([(first, s1, nz1), (second.unwrap_or(first), s2, nz2)])
 }
 
-/// [`WindowSums::block_ids`] for `n = N`.
+impl<const N: usize, const B: usize> Window<'_, N, B> {
+    /// One pass over the window. `MASKED`: the sum of `w * I` over primitive `id`'s
+    /// samples and the smallest id above `id` among the samples of non-zero weight;
+    /// otherwise the whole window's sum and its smallest such id (`None`: no larger id, or
+    /// no sample of non-zero weight).
+    #[inline(always)]
+    fn pass<W: Word, const MASKED: bool>(&self, id: u32) -> (W, Option<u32>) {
+        let size = N * B;
+        let (kw, nz) = (&self.kw[..size * size], &self.nz[..size * size]);
+        let mut acc = W::default();
+        let mut next = u32::MAX;
+        let mut found = 0u32;
+        for j in 0..size {
+            let row = self.base + j * self.sw;
+            let (is, ps) = (&self.inten[row..row + size], &self.prim[row..row + size]);
+            let (ws, nzs) = (&kw[j * size..(j + 1) * size], &nz[j * size..(j + 1) * size]);
+            for t in 0..size {
+                let v = W::prod(ws[t], is[t]);
+                acc = acc.add(if MASKED { v.keep(ps[t] == id) } else { v });
+                // Candidates: samples of non-zero weight (above `id` when masked).
+                let above = if MASKED { ps[t] > id } else { true };
+                let cand = nzs[t] & 0u32.wrapping_sub(u32::from(above));
+                found |= cand;
+                next = next.min(ps[t] | !cand);
+            }
+        }
+        (acc, (found != 0).then_some(next))
+    }
+}
+
+/// The ids of the `n x n` blocks (`n = N`) of the windows of `pixels` pixels of one pixel
+/// row: `ids[by * cols + g]` is the primitive owning all samples of block row `by`, block
+/// column `g` (pixel `g - bx` of the span sees it as its block `bx`), or [`MIXED`] when the
+/// block crosses an edge. `base` is the buffer index of the span's first window.
 #[inline(always)]
-fn block_ids_n<const N: usize>(
+pub(super) fn block_ids_n<const N: usize, const B: usize>(
     prim: &[u32],
-    k: &Kernel,
     base: usize,
     sw: usize,
     pixels: usize,
     ids: &mut Vec<u64>,
 ) {
-    let blocks = k.size / N;
+    let blocks = B;
     let cols = pixels + blocks - 1;
     ids.clear();
     for by in 0..blocks {
@@ -273,18 +212,6 @@ fn block_ids_n<const N: usize>(
 
 /// A block id: the block's samples belong to more than one primitive.
 pub(super) const MIXED: u64 = u64::MAX;
-
-/// Whether each `n x n` block of the kernel (row-major) has a non-zero weight.
-fn block_nz(k: &Kernel) -> Vec<bool> {
-    let n = k.n as usize;
-    let blocks = k.size / n;
-    (0..blocks * blocks)
-        .map(|b| {
-            let (by, bx) = (b / blocks, b % blocks);
-            (0..n * n).any(|e| k.w[(by * n + e / n) * k.size + bx * n + e % n] != 0)
-        })
-        .collect()
-}
 
 /// The product statistics of one row of pixels, recorded exactly as
 /// [`SignalStats::record`] would (same values, same order of the float sums) but without

@@ -1,0 +1,277 @@
+//! The pixel loop of one span of a pixel row (the pixels of one tile column): the block ids,
+//! each pixel's window sums ([`WindowSums::sum_nb`]), their rounding and frame adds, and the
+//! depth and coverage of the pixel's own samples.
+//!
+//! The loop is compiled per sample count `n`, filter base and sum [`Word`], and a second
+//! time with AVX2 enabled, chosen at run time when the CPU has it (the binary still runs
+//! on any x86-64): with the window's size a constant the compiler vectorises the window's
+//! dot products, and AVX2 adds 8-lane 32-bit multiplies. Every build computes the same
+//! codes and statistics (`tests/accumulate.rs` compares them with the straightforward
+//! model).
+
+use super::fixed::{AccParams, RowOut};
+use super::window::{ProductStats, WindowSums, Word, block_ids_n};
+use crate::error::Result;
+use crate::stage::visibility::{BACKGROUND, Samples};
+
+/// One span: the pixels `xa..xb` of the pixel row whose windows start at sample row `r0`
+/// (buffer rows), in tile column `tc` (binned runs).
+pub(super) struct Span<'a> {
+    pub s: &'a Samples,
+    pub p: &'a AccParams,
+    pub r0: usize,
+    pub xa: u32,
+    pub xb: u32,
+    pub tc: Option<usize>,
+}
+
+/// Where a span's pixels go: its slices of the frame's rows.
+pub(super) struct Dst<'a> {
+    pub acc: &'a mut [u32],
+    pub depth: &'a mut [u32],
+    pub cov: &'a mut [u16],
+}
+
+/// The scratch a row reuses for its spans.
+pub(super) struct Scratch {
+    pub win: WindowSums,
+    pub ids: Vec<u64>,
+    pub stats: ProductStats,
+}
+
+/// How the window sums are computed: in `u32` (every sum provably fits) or `u64`, and in
+/// the AVX2 build or the portable one; the results are the same.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Build {
+    pub narrow: bool,
+    pub avx2: bool,
+}
+
+/// Whether the CPU has AVX2 (the standard library caches the answer).
+pub(super) fn has_avx2() -> bool {
+    simd::avx2()
+}
+
+/// Computes the span's pixels into `out` (pushed in order).
+pub(super) fn run(sp: &Span, sc: &mut Scratch, dst: Dst, out: &mut RowOut, b: Build) -> Result<()> {
+    macro_rules! go {
+        ($n:literal, $b:literal) => {
+            if b.narrow {
+                build::<$n, $b, u32>(sp, sc, dst, out, b.avx2)
+            } else {
+                build::<$n, $b, u64>(sp, sc, dst, out, b.avx2)
+            }
+        };
+    }
+    let k = &sp.p.kernel;
+    match (k.n, k.size / k.n as usize) {
+        (1, 1) => go!(1, 1),
+        (1, 2) => go!(1, 2),
+        (1, _) => go!(1, 3),
+        (2, 1) => go!(2, 1),
+        (2, 2) => go!(2, 2),
+        (2, _) => go!(2, 3),
+        (4, 1) => go!(4, 1),
+        (4, 2) => go!(4, 2),
+        (4, _) => go!(4, 3),
+        (_, 1) => go!(8, 1),
+        (_, 2) => go!(8, 2),
+        _ => go!(8, 3),
+    }
+}
+
+#[inline(always)]
+fn build<const N: usize, const B: usize, W: Word>(
+    sp: &Span,
+    sc: &mut Scratch,
+    dst: Dst,
+    out: &mut RowOut,
+    avx2: bool,
+) -> Result<()> {
+    if avx2 {
+        simd::pixels_avx2::<N, B, W>(sp, sc, dst, out)
+    } else {
+        pixels::<N, B, W>(sp, sc, dst, out)
+    }
+}
+
+/// The loop every build compiles: `n = N`, windows of `B x B` blocks, sums in `W`.
+#[inline(always)]
+fn pixels<const N: usize, const B: usize, W: Word>(
+    sp: &Span,
+    sc: &mut Scratch,
+    dst: Dst,
+    out: &mut RowOut,
+) -> Result<()> {
+    let (s, p) = (sp.s, sp.p);
+    let k = &p.kernel;
+    let sw = s.reg.width();
+    let npx = (sp.xb - sp.xa) as usize;
+    let first = sp.r0 * sw + (sp.xa as i64 * N as i64 - k.off - s.reg.c0) as usize;
+    block_ids_n::<N, B>(&s.prim, first, sw, npx, &mut sc.ids);
+    let cols = npx + B - 1;
+    let macs = (N * B * N * B) as u64;
+    for gx in 0..npx {
+        let base = first + gx * N;
+        sc.win
+            .sum_nb::<N, B, W>(&s.prim, &s.i, &k.w, base, sw, &sc.ids, gx, cols);
+        let mut acc = 0i64;
+        for &(_, sum) in &sc.win.frags {
+            let part = p.product_row(sum, &mut sc.stats);
+            acc = p.add(acc, part, &mut out.work.overflows)?;
+        }
+        let nf = sc.win.frags.len() as u64;
+        out.work.pixels += 1;
+        out.work.macs += macs;
+        out.work.fragments += nf;
+        if let Some(c) = sp.tc {
+            out.tile_rmw[c] += nf;
+        }
+        dst.acc[gx] = acc as u32;
+    }
+    // Depth and coverage of each pixel's own `N x N` samples: the span's own blocks lie
+    // side by side in `N` sample rows, so each row is one pass.
+    let own = first + k.off as usize * sw + k.off as usize;
+    dst.depth.fill(u32::MAX);
+    dst.cov.fill(0);
+    for sy in 0..N {
+        let row = own + sy * sw;
+        let ps = &s.prim[row..row + npx * N];
+        let zs = &s.z[row..row + npx * N];
+        let blocks = ps.chunks_exact(N).zip(zs.chunks_exact(N));
+        for ((d, c), (pb, zb)) in dst.depth.iter_mut().zip(dst.cov.iter_mut()).zip(blocks) {
+            let (mut zmin, mut cov) = (u32::MAX, 0u16);
+            for t in 0..N {
+                let covered = pb[t] != BACKGROUND;
+                cov += u16::from(covered);
+                zmin = zmin.min(if covered { zb[t] } else { u32::MAX });
+            }
+            *d = (*d).min(zmin);
+            *c += cov;
+        }
+    }
+    Ok(())
+}
+
+/// The run-time AVX2 build of [`pixels`].
+#[cfg(target_arch = "x86_64")]
+mod simd {
+    use super::*;
+
+    pub fn avx2() -> bool {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+
+    /// [`super::pixels`] compiled with AVX2; call only when [`avx2`] holds.
+    #[inline]
+    pub fn pixels_avx2<const N: usize, const B: usize, W: Word>(
+        sp: &Span,
+        sc: &mut Scratch,
+        dst: Dst,
+        out: &mut RowOut,
+    ) -> Result<()> {
+        #[target_feature(enable = "avx2")]
+        fn run<const N: usize, const B: usize, W: Word>(
+            sp: &Span,
+            sc: &mut Scratch,
+            dst: Dst,
+            out: &mut RowOut,
+        ) -> Result<()> {
+            super::pixels::<N, B, W>(sp, sc, dst, out)
+        }
+        debug_assert!(avx2());
+        // SAFETY: `run` is safe code compiled with AVX2 enabled; callers pass `avx2 = true`
+        // only after `avx2()` found the feature on this CPU (`Build::avx2`).
+        unsafe { run::<N, B, W>(sp, sc, dst, out) }
+    }
+}
+
+/// Other targets: the portable build only.
+#[cfg(not(target_arch = "x86_64"))]
+mod simd {
+    use super::*;
+
+    pub fn avx2() -> bool {
+        false
+    }
+
+    pub fn pixels_avx2<const N: usize, const B: usize, W: Word>(
+        sp: &Span,
+        sc: &mut Scratch,
+        dst: Dst,
+        out: &mut RowOut,
+    ) -> Result<()> {
+        super::pixels::<N, B, W>(sp, sc, dst, out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Build;
+    use crate::config::{FilterKind, HwConfig};
+    use crate::pipeline;
+    use crate::scene::Scene;
+    use crate::stage::accumulate::fixed::{AccParams, accumulate_build};
+    use crate::stage::accumulate::kernel;
+    use crate::stage::{RunOptions, StageId};
+
+    /// Every build of the window kernel (u32 and u64 sums, portable and AVX2 when the CPU
+    /// has it) gives the same frame, work and statistics on the default scene, for each
+    /// filter and sample count.
+    #[test]
+    fn every_build_computes_the_same_frame() {
+        let scene = Scene::default_scene();
+        let builds: Vec<Build> = [(true, false), (false, false), (true, true), (false, true)]
+            .into_iter()
+            .filter(|&(_, avx2)| !avx2 || super::has_avx2())
+            .map(|(narrow, avx2)| Build { narrow, avx2 })
+            .collect();
+        for (filter, n) in [
+            (FilterKind::Tent, 4),
+            (FilterKind::Box, 2),
+            (FilterKind::Gaussian, 1),
+            (FilterKind::Gaussian, 2),
+            (FilterKind::Tent, 1),
+        ] {
+            let mut hw = HwConfig::default_config();
+            hw.accumulate.filter = filter;
+            hw.raster.samples = n;
+            let (plan, taps) =
+                pipeline::run_through(&scene, &hw, RunOptions::FAST, StageId::Visibility)
+                    .expect("renders");
+            let s = taps.fixed.samples();
+            let p = AccParams {
+                kernel: kernel(&hw),
+                i_frac: hw.input.intensity.format.frac_bits,
+                frame: hw.accumulate.frame,
+            };
+            let l = &plan.layout;
+            let size = (scene.image.width, scene.image.height);
+            let run = |b: Build| {
+                accumulate_build(
+                    &s.samples,
+                    &l.region,
+                    Some(&l.tiles),
+                    &s.points,
+                    &p,
+                    s.bg,
+                    size,
+                    Some(b),
+                )
+                .expect("accumulates")
+            };
+            let first = run(builds[0]);
+            for &b in &builds[1..] {
+                let r = run(b);
+                assert_eq!(r.0, first.0, "{filter:?} n={n} {b:?}: frame");
+                assert_eq!(r.1, first.1, "{filter:?} n={n} {b:?}: work");
+                assert_eq!(r.3, first.3, "{filter:?} n={n} {b:?}: tile writes");
+                assert_eq!(
+                    format!("{:?}", r.2),
+                    format!("{:?}", first.2),
+                    "{filter:?} n={n} {b:?}: statistics"
+                );
+            }
+        }
+    }
+}
