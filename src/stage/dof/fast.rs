@@ -40,7 +40,7 @@ impl Word for u128 {
 /// A plane word of the emulator: `u32` where every value of the run provably fits (the tap
 /// multiplies are then 32 x 32 -> 64 bits, which vectorise), `u64` otherwise. The hardware's
 /// widths are the configured ones either way.
-pub(super) trait Plane: Copy + Default + PartialEq + 'static {
+pub(super) trait Plane: Copy + Default + PartialEq + Send + Sync + 'static {
     fn get(self) -> u64;
     /// `v`, which the caller has proven to fit.
     fn put(v: u64) -> Self;

@@ -2,13 +2,16 @@
 //! tap passes ([`row_mac`], the HDL model's reference), the layer colour and alpha, and the
 //! back-to-front composite; work and overflow counts in [`DofWork`].
 
-use super::fast::{self, Plane};
+use super::fast::Plane;
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::scratch::Scratch;
+use super::strip::{LayerCx, run_strip, strip_rows};
 use super::uniform;
 use crate::config::DofCfg;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift, round_shift_i64};
+use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::Mutex;
 
 /// Work and overflow counts of the fixed model.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -29,6 +32,20 @@ pub struct DofWork {
     pub out_overflows: u64,
     /// Uniform 16x16 tiles skipped (`dof.skip_uniform_tiles`; else 0).
     pub skipped_tiles: u64,
+}
+
+impl DofWork {
+    /// Adds another part's counts (strips of a layer).
+    pub(super) fn add(&mut self, o: &DofWork) {
+        self.macs += o.macs;
+        self.divides += o.divides;
+        self.composites += o.composites;
+        self.passthrough += o.passthrough;
+        self.line_overflows += o.line_overflows;
+        self.acc_overflows += o.acc_overflows;
+        self.out_overflows += o.out_overflows;
+        self.skipped_tiles += o.skipped_tiles;
+    }
 }
 
 /// In-image tap sums along one axis of length `n` for taps `c`.
@@ -222,8 +239,6 @@ fn exec_with<P: Plane>(
 ) -> Result<FixedRun, (String, u32)> {
     let (w, h) = (img.width, img.height);
     let (q, g) = (p.alpha_bits, p.guard_bits);
-    let line_max: u128 = (1u128 << p.line_bits) - 1;
-    let acc_max: u128 = (1u128 << p.acc_bits) - 1;
     let mut work = DofWork::default();
     let mut skipped = vec![0u64; plan.layers.len()];
     // A composite never exceeds the largest code times 2^g (every colour is a weighted mean
@@ -231,9 +246,11 @@ fn exec_with<P: Plane>(
     let mut out = vec![0u64; w * h];
     let mut def = vec![false; w * h];
     let one_q = 1u128 << q;
-    let n2 = u64::from(img.n2);
     let boxes = layer_boxes(w, h, plan);
-    let mut s = Scratch::<P>::new();
+    // One scratch per thread, kept across strips and layers.
+    let pool: Vec<Mutex<Scratch<P>>> = (0..rayon::current_num_threads().max(1))
+        .map(|_| Mutex::new(Scratch::new()))
+        .collect();
     for (l, layer) in plan.layers.iter().enumerate() {
         let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
@@ -244,6 +261,7 @@ fn exec_with<P: Plane>(
         let wy = border_sums(c, h);
         if layer.m == 0 {
             // sigma = 0: the mask is the identity; pass through.
+            let s = &mut *pool[0].lock().expect("scratch");
             s.input(img, plan, l, (x0, y0, bw, bh));
             for y in 0..bh {
                 for x in 0..bw {
@@ -270,179 +288,66 @@ fn exec_with<P: Plane>(
                 .next_multiple_of(uniform::UNIFORM_TILE),
             _ => usize::MAX,
         };
-        let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
         let cp: Vec<P> = c.iter().map(|&v| P::put(v)).collect();
-        let cp = &cp[..];
-        // Output rows [r0, r1) of the box per strip; the planes cover [e0, e1), M more rows
-        // each side (clipped to the box), whose uniform windows and sums for [r0, r1) are
-        // those of the whole box (docs/dof.md, "Strips").
-        let mut r0 = 0;
-        while r0 < bh {
-            let r1 = if strip >= bh {
-                bh
-            } else {
-                ((y0 + r0) / strip * strip + strip - y0).min(bh)
-            };
-            let (e0, e1) = (r0.saturating_sub(layer.m), (r1 + layer.m).min(bh));
-            let eh = e1 - e0;
-            s.input(img, plan, l, (x0, y0 + e0, bw, eh));
-            let (xi, ai, val) = (&s.xi[..], &s.ai[..], &s.val[..]);
-            // Uniform windows (docs/dof.md): exact without MACs where, besides the window
-            // being uniform, neither word saturates and the box's tap sums are the image's.
-            s.full.clear();
-            s.full.extend(ai.iter().map(|&a| a.get() == n2));
-            s.win.compute(bw, eh, layer.m, &s.full, val);
-            let u = &mut s.win.u;
-            for yy in 0..eh {
-                let y = e0 + yy;
-                for x in 0..bw {
-                    let i = yy * bw + x;
-                    if u[i] {
-                        let hxv = xi[i].get() as u128 * bsx[x] as u128;
-                        u[i] = hxv <= line_max
-                            && hxv * bsy[y] as u128 <= acc_max
-                            && bsx[x] == wx[x + x0]
-                            && bsy[y] == wy[y + y0];
-                    }
-                }
+        let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
+        let cx = LayerCx {
+            img,
+            plan,
+            p,
+            exec,
+            l,
+            m: layer.m,
+            c,
+            cp: &cp,
+            boxr: (x0, y0, bw, bh),
+            wx: &wx,
+            wy: &wy,
+            bsx: &bsx,
+            bsy: &bsy,
+        };
+        let strips = strip_rows(y0, bh, strip);
+        // The box's rows of the image, one slice per strip.
+        let rows = &mut out[y0 * w..(y0 + bh) * w];
+        let drows = &mut def[y0 * w..(y0 + bh) * w];
+        if strips.len() == 1 {
+            let mut sk = 0;
+            run_strip(
+                &cx,
+                &mut pool[0].lock().expect("scratch"),
+                (0, bh),
+                rows,
+                drows,
+                &mut work,
+                &mut sk,
+                Some(&mut observe),
+            )?;
+            skipped[l] += sk;
+        } else {
+            let mut parts = Vec::with_capacity(strips.len());
+            let (mut rest, mut drest) = (rows, drows);
+            for &(r0, r1) in &strips {
+                let (o, r) = rest.split_at_mut((r1 - r0) * w);
+                let (d, dr) = drest.split_at_mut((r1 - r0) * w);
+                parts.push(((r0, r1), o, d));
+                (rest, drest) = (r, dr);
             }
-            let (u, hu) = (&s.win.u[..], &s.win.hu[..]);
-            // The hardware option: 16x16 tiles of uniform pixels skip both passes.
-            let tile_skip = if p.skip_uniform_tiles {
-                let (tiles, mask) = uniform::skipped_tiles(
-                    &u[(r0 - e0) * bw..(r1 - e0) * bw],
-                    (x0, y0 + r0, bw, r1 - r0),
-                );
-                work.skipped_tiles += tiles;
-                skipped[l] += mask.iter().filter(|&&b| b).count() as u64;
-                Some(mask)
-            } else {
-                None
-            };
-            // Horizontal pass into the line buffer: a saturated sum fits u64
-            // (`line_bits` <= 64) and so does an alpha sum (taps of at most 2^20 times n2).
-            let (hx, ha) = (&mut s.hx, &mut s.ha);
-            hx.clear();
-            ha.clear();
-            // `x * m` is at most a u32 code times n2: a bound, not a scan.
-            let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
-            let mut hmax = 0u64;
-            for yy in 0..eh {
-                let (rx, ra) = (&xi[yy * bw..(yy + 1) * bw], &ai[yy * bw..(yy + 1) * bw]);
-                // Rows of the neighbouring strips are computed again, counted there.
-                let counted = (r0..r1).contains(&(e0 + yy));
-                for x in 0..bw {
-                    let i = yy * bw + x;
-                    let r = match exec {
-                        Exec::Full => row_mac(c, x, bw, line_max, |i| {
-                            (rx[i].get() as u128, ra[i].get() as u128)
-                        }),
-                        _ if hu[i] => fast::mac_out(
-                            rx[x].get() as u128 * bsx[x] as u128,
-                            ra[x].get() as u128 * bsx[x] as u128,
-                            line_max,
-                        ),
-                        _ => {
-                            let (sx, sa) = if wide_h {
-                                fast::hsum::<u128, P>(cp, rx, ra, x)
-                            } else {
-                                fast::hsum::<u64, P>(cp, rx, ra, x)
-                            };
-                            fast::mac_out(sx, sa, line_max)
-                        }
-                    };
-                    if r.overflow && counted {
-                        work.line_overflows += 1;
-                        if p.overflow == Overflow::Error {
-                            return Err(("dof.line".into(), p.line_bits));
-                        }
-                    }
-                    hx.push(P::put(r.x as u64));
-                    ha.push(P::put(r.a as u64));
-                    hmax = hmax.max(r.x as u64).max(r.a as u64);
-                }
+            // Each strip on a thread with that thread's scratch; counts summed in strip
+            // order (integers: the same on any thread count).
+            let done: Vec<Result<(DofWork, u64), (String, u32)>> = parts
+                .into_par_iter()
+                .map(|(r, o, d)| {
+                    let t = rayon::current_thread_index().unwrap_or(0) % pool.len();
+                    let mut s = pool[t].lock().expect("scratch");
+                    let (mut wk, mut sk) = (DofWork::default(), 0);
+                    run_strip(&cx, &mut s, r, o, d, &mut wk, &mut sk, None)?;
+                    Ok((wk, sk))
+                })
+                .collect();
+            for r in done {
+                let (wk, sk) = r?;
+                work.add(&wk);
+                skipped[l] += sk;
             }
-            let (hx, ha) = (&hx[..], &ha[..]);
-            if let (true, Some(xi), Some(ai), Some(hx), Some(ha)) = (
-                strip >= bh,
-                P::as_u64(xi),
-                P::as_u64(ai),
-                P::as_u64(hx),
-                P::as_u64(ha),
-            ) {
-                observe(&LayerPlanes {
-                    layer: l,
-                    x0,
-                    y0,
-                    bw,
-                    bh,
-                    xi,
-                    ai,
-                    hx,
-                    ha,
-                });
-            }
-            // Vertical pass, colour, alpha, composite.
-            let wide_v = !fast::fits_u64(hmax as u128, p.coef_bits);
-            s.rows.reset(bw, wide_v);
-            for y in r0..r1 {
-                let yy = y - e0;
-                let ur = &u[yy * bw..(yy + 1) * bw];
-                if exec != Exec::Full {
-                    s.rows.fill(cp, hx, ha, (bw, eh), yy, ur);
-                }
-                for x in 0..bw {
-                    let i = yy * bw + x;
-                    let pi = (y + y0) * w + x + x0;
-                    let skip = tile_skip.as_ref().is_some_and(|t| t[(y - r0) * bw + x]);
-                    if exec != Exec::Full && ur[x] {
-                        // Uniform window: colour v exactly, alpha one (docs/dof.md).
-                        if !skip {
-                            work.divides += 1;
-                        }
-                        composite(
-                            &mut out[pi],
-                            &mut def[pi],
-                            (val[i] as u128) << g,
-                            one_q,
-                            one_q,
-                            q,
-                            p.quant,
-                        );
-                        work.composites += 1;
-                        continue;
-                    }
-                    let r = match exec {
-                        Exec::Full => row_mac(c, yy, eh, acc_max, |i| {
-                            (hx[i * bw + x].get() as u128, ha[i * bw + x].get() as u128)
-                        }),
-                        _ => {
-                            let (sx, sa) = s.rows.get(x);
-                            fast::mac_out(sx, sa, acc_max)
-                        }
-                    };
-                    if r.overflow {
-                        work.acc_overflows += 1;
-                        if p.overflow == Overflow::Error {
-                            return Err(("dof.acc".into(), p.acc_bits));
-                        }
-                    }
-                    let (sx, sa) = (r.x, r.a);
-                    if sa == 0 {
-                        continue;
-                    }
-                    if !skip {
-                        work.divides += 1;
-                    }
-                    // colour = round(F 2^g / A): half-up integer divide
-                    let col = udiv(sx << (g + 1), sa).div_ceil(2);
-                    let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
-                    let aq = udiv(sa << (q + 1), ws).div_ceil(2).min(one_q);
-                    composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
-                    work.composites += 1;
-                }
-            }
-            r0 = r1;
         }
         let active = (bw * bh) as u64 - skipped[l];
         // Both passes, colour and alpha planes.
@@ -466,7 +371,15 @@ fn exec_with<P: Plane>(
 /// first layer at a pixel, or an opaque one (`aq = one`: the quotient is exact), writes
 /// `col`.
 #[inline]
-fn composite(o: &mut u64, d: &mut bool, col: u128, aq: u128, one: u128, q: u32, quant: Quant) {
+pub(super) fn composite(
+    o: &mut u64,
+    d: &mut bool,
+    col: u128,
+    aq: u128,
+    one: u128,
+    q: u32,
+    quant: Quant,
+) {
     debug_assert!(col <= u128::from(u64::MAX));
     if !*d || aq == one {
         *o = col as u64;
@@ -483,7 +396,7 @@ fn composite(o: &mut u64, d: &mut bool, col: u128, aq: u128, one: u128, q: u32, 
 
 /// `a / b`, in 64-bit words when both fit (the common case; the same quotient).
 #[inline(always)]
-fn udiv(a: u128, b: u128) -> u128 {
+pub(super) fn udiv(a: u128, b: u128) -> u128 {
     if (a | b) >> 64 == 0 {
         u128::from(a as u64 / b as u64)
     } else {

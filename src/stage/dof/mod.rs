@@ -103,6 +103,7 @@ mod potentiate;
 mod reference;
 mod scratch;
 mod stage;
+mod strip;
 mod uniform;
 
 pub use cost::{

@@ -1,0 +1,254 @@
+//! One strip of one blurred layer of the fixed layered datapath ([`super::fixed`]): the
+//! strip's input planes (with the `M` rows either side its vertical taps read), its uniform
+//! windows, the horizontal pass into the line buffer, the vertical pass, the layer colour
+//! and alpha, and the composite into the strip's output rows. The strips of a layer write
+//! disjoint rows, so they run in parallel ([`super::fixed::layered_fixed_exec`]); the
+//! layers run one after the other (the composite is back to front).
+
+use super::fast::{self, Plane};
+use super::fixed::{DofWork, Exec, LayerPlanes, composite, row_mac, udiv};
+use super::layers::{DepthImage, LayerPlan};
+use super::scratch::Scratch;
+use super::uniform;
+use crate::config::DofCfg;
+use crate::fixed::Overflow;
+
+/// What every strip of one blurred layer shares.
+pub(super) struct LayerCx<'a, P> {
+    pub img: &'a DepthImage<'a, u32>,
+    pub plan: &'a LayerPlan,
+    pub p: &'a DofCfg,
+    pub exec: Exec,
+    /// Layer index.
+    pub l: usize,
+    /// Mask half-size.
+    pub m: usize,
+    /// The 1-D taps, and in plane words.
+    pub c: &'a [u64],
+    pub cp: &'a [P],
+    /// The layer's box `(x0, y0, bw, bh)`.
+    pub boxr: (usize, usize, usize, usize),
+    /// In-image tap sums along the image's rows and columns, and along the box's.
+    pub wx: &'a [u64],
+    pub wy: &'a [u64],
+    pub bsx: &'a [u64],
+    pub bsy: &'a [u64],
+}
+
+/// The output rows `[r0, r1)` of the box per strip of `strip` rows: strips start at image
+/// rows that are multiples of `strip` (one strip when `strip >= bh`).
+pub(super) fn strip_rows(y0: usize, bh: usize, strip: usize) -> Vec<(usize, usize)> {
+    let mut rows = Vec::new();
+    let mut r0 = 0;
+    while r0 < bh {
+        let r1 = if strip >= bh {
+            bh
+        } else {
+            ((y0 + r0) / strip * strip + strip - y0).min(bh)
+        };
+        rows.push((r0, r1));
+        r0 = r1;
+    }
+    rows
+}
+
+/// Computes output rows `[r0, r1)` of the layer's box into `out` and `def`, the image rows
+/// from `y0 + r0` on (whole rows of the image); counts into `work` and `skipped` (pixels of
+/// skipped uniform tiles). `observe` sees the planes (a layer of one strip). `Err` names the
+/// overflowing signal in overflow mode ERROR.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn run_strip<P: Plane>(
+    cx: &LayerCx<P>,
+    s: &mut Scratch<P>,
+    (r0, r1): (usize, usize),
+    out: &mut [u64],
+    def: &mut [bool],
+    work: &mut DofWork,
+    skipped: &mut u64,
+    observe: Option<&mut dyn FnMut(&LayerPlanes)>,
+) -> Result<(), (String, u32)> {
+    let LayerCx {
+        img,
+        plan,
+        p,
+        exec,
+        l,
+        m,
+        c,
+        cp,
+        wx,
+        wy,
+        bsx,
+        bsy,
+        ..
+    } = *cx;
+    let (x0, y0, bw, bh) = cx.boxr;
+    let w = img.width;
+    let (q, g) = (p.alpha_bits, p.guard_bits);
+    let line_max: u128 = (1u128 << p.line_bits) - 1;
+    let acc_max: u128 = (1u128 << p.acc_bits) - 1;
+    let one_q = 1u128 << q;
+    let n2 = u64::from(img.n2);
+    // The planes cover [e0, e1), M more rows each side (clipped to the box), whose uniform
+    // windows and sums for [r0, r1) are those of the whole box (docs/dof.md, "Strips").
+    let (e0, e1) = (r0.saturating_sub(m), (r1 + m).min(bh));
+    let eh = e1 - e0;
+    s.input(img, plan, l, (x0, y0 + e0, bw, eh));
+    let (xi, ai, val) = (&s.xi[..], &s.ai[..], &s.val[..]);
+    // Uniform windows (docs/dof.md): exact without MACs where, besides the window
+    // being uniform, neither word saturates and the box's tap sums are the image's.
+    s.full.clear();
+    s.full.extend(ai.iter().map(|&a| a.get() == n2));
+    s.win.compute(bw, eh, m, &s.full, val);
+    let u = &mut s.win.u;
+    for yy in 0..eh {
+        let y = e0 + yy;
+        for x in 0..bw {
+            let i = yy * bw + x;
+            if u[i] {
+                let hxv = xi[i].get() as u128 * bsx[x] as u128;
+                u[i] = hxv <= line_max
+                    && hxv * bsy[y] as u128 <= acc_max
+                    && bsx[x] == wx[x + x0]
+                    && bsy[y] == wy[y + y0];
+            }
+        }
+    }
+    let (u, hu) = (&s.win.u[..], &s.win.hu[..]);
+    // The hardware option: 16x16 tiles of uniform pixels skip both passes.
+    let tile_skip = if p.skip_uniform_tiles {
+        let (tiles, mask) = uniform::skipped_tiles(
+            &u[(r0 - e0) * bw..(r1 - e0) * bw],
+            (x0, y0 + r0, bw, r1 - r0),
+        );
+        work.skipped_tiles += tiles;
+        *skipped += mask.iter().filter(|&&b| b).count() as u64;
+        Some(mask)
+    } else {
+        None
+    };
+    // Horizontal pass into the line buffer: a saturated sum fits u64
+    // (`line_bits` <= 64) and so does an alpha sum (taps of at most 2^20 times n2).
+    let (hx, ha) = (&mut s.hx, &mut s.ha);
+    hx.clear();
+    ha.clear();
+    // `x * m` is at most a u32 code times n2: a bound, not a scan.
+    let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
+    let mut hmax = 0u64;
+    for yy in 0..eh {
+        let (rx, ra) = (&xi[yy * bw..(yy + 1) * bw], &ai[yy * bw..(yy + 1) * bw]);
+        // Rows of the neighbouring strips are computed again, counted there.
+        let counted = (r0..r1).contains(&(e0 + yy));
+        for x in 0..bw {
+            let i = yy * bw + x;
+            let r = match exec {
+                Exec::Full => row_mac(c, x, bw, line_max, |i| {
+                    (rx[i].get() as u128, ra[i].get() as u128)
+                }),
+                _ if hu[i] => fast::mac_out(
+                    rx[x].get() as u128 * bsx[x] as u128,
+                    ra[x].get() as u128 * bsx[x] as u128,
+                    line_max,
+                ),
+                _ => {
+                    let (sx, sa) = if wide_h {
+                        fast::hsum::<u128, P>(cp, rx, ra, x)
+                    } else {
+                        fast::hsum::<u64, P>(cp, rx, ra, x)
+                    };
+                    fast::mac_out(sx, sa, line_max)
+                }
+            };
+            if r.overflow && counted {
+                work.line_overflows += 1;
+                if p.overflow == Overflow::Error {
+                    return Err(("dof.line".into(), p.line_bits));
+                }
+            }
+            hx.push(P::put(r.x as u64));
+            ha.push(P::put(r.a as u64));
+            hmax = hmax.max(r.x as u64).max(r.a as u64);
+        }
+    }
+    let (hx, ha) = (&hx[..], &ha[..]);
+    if let (Some(observe), Some(xi), Some(ai), Some(hx), Some(ha)) = (
+        observe,
+        P::as_u64(xi),
+        P::as_u64(ai),
+        P::as_u64(hx),
+        P::as_u64(ha),
+    ) {
+        observe(&LayerPlanes {
+            layer: l,
+            x0,
+            y0,
+            bw,
+            bh,
+            xi,
+            ai,
+            hx,
+            ha,
+        });
+    }
+    // Vertical pass, colour, alpha, composite.
+    let wide_v = !fast::fits_u64(hmax as u128, p.coef_bits);
+    s.rows.reset(bw, wide_v);
+    for y in r0..r1 {
+        let yy = y - e0;
+        let ur = &u[yy * bw..(yy + 1) * bw];
+        if exec != Exec::Full {
+            s.rows.fill(cp, hx, ha, (bw, eh), yy, ur);
+        }
+        for x in 0..bw {
+            let i = yy * bw + x;
+            let pi = (y - r0) * w + x + x0;
+            let skip = tile_skip.as_ref().is_some_and(|t| t[(y - r0) * bw + x]);
+            if exec != Exec::Full && ur[x] {
+                // Uniform window: colour v exactly, alpha one (docs/dof.md).
+                if !skip {
+                    work.divides += 1;
+                }
+                composite(
+                    &mut out[pi],
+                    &mut def[pi],
+                    (val[i] as u128) << g,
+                    one_q,
+                    one_q,
+                    q,
+                    p.quant,
+                );
+                work.composites += 1;
+                continue;
+            }
+            let r = match exec {
+                Exec::Full => row_mac(c, yy, eh, acc_max, |i| {
+                    (hx[i * bw + x].get() as u128, ha[i * bw + x].get() as u128)
+                }),
+                _ => {
+                    let (sx, sa) = s.rows.get(x);
+                    fast::mac_out(sx, sa, acc_max)
+                }
+            };
+            if r.overflow {
+                work.acc_overflows += 1;
+                if p.overflow == Overflow::Error {
+                    return Err(("dof.acc".into(), p.acc_bits));
+                }
+            }
+            let (sx, sa) = (r.x, r.a);
+            if sa == 0 {
+                continue;
+            }
+            if !skip {
+                work.divides += 1;
+            }
+            // colour = round(F 2^g / A): half-up integer divide
+            let col = udiv(sx << (g + 1), sa).div_ceil(2);
+            let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
+            let aq = udiv(sa << (q + 1), ws).div_ceil(2).min(one_q);
+            composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
+            work.composites += 1;
+        }
+    }
+    Ok(())
+}
