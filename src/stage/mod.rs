@@ -13,6 +13,7 @@ pub mod dof;
 pub mod gamma;
 pub mod input;
 pub mod logdomain;
+pub mod parts;
 pub mod raster;
 pub mod setup;
 pub mod taps;

@@ -3,6 +3,7 @@
 //! the arithmetic).
 
 use super::mask::Mask;
+use crate::stage::parts::run_parts;
 use rayon::prelude::*;
 
 /// Ordered dither of one value (fixed): `floor(x / 2^s + (m + 0.5) / 2^b)`, unsaturated.
@@ -193,19 +194,20 @@ pub fn apply_ordered_with(
             })
             .sum()
     };
-    // One band of whole rows per thread (at least BAND_PIXELS): the count is a sum of
-    // integers, the same in any order.
+    // One band of whole rows per thread (at least BAND_PIXELS), the first on the calling
+    // thread: the count is a sum of integers, the same in any order.
     let height = out.len().min(x.len()).div_ceil(w);
     let threads = rayon::current_num_threads().max(1);
     let band = height.div_ceil(threads).max(BAND_PIXELS.div_ceil(w)).max(1);
     if run != Run::Parallel || band >= height {
         return rows(0, out, x);
     }
-    out.par_chunks_mut(w * band)
-        .zip(x.par_chunks(w * band))
-        .enumerate()
-        .map(|(b, (o, xb))| rows(b * band, o, xb))
-        .sum()
+    let parts: Vec<_> = out.chunks_mut(w * band).zip(x.chunks(w * band)).collect();
+    run_parts(parts.into_iter().enumerate().collect(), |(b, (o, xb))| {
+        rows(b * band, o, xb)
+    })
+    .into_iter()
+    .sum()
 }
 
 /// Smallest band of [`apply_ordered`] handed to a thread, in pixels (rounded up to rows).

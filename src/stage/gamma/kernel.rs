@@ -8,7 +8,7 @@
 //! development machine (docs/dither.md). Both builds compute the same codes; the
 //! portable one stays reachable ([`lookup_block_portable`]) so tests compare the two.
 
-use rayon::prelude::*;
+use crate::stage::parts::run_parts;
 
 /// Smallest chunk of [`lookup`] handed to a thread (smaller frames run on the caller).
 pub const BLOCK: usize = 1 << 14;
@@ -118,8 +118,8 @@ mod simd {
 }
 
 /// [`lookup_block`] over the whole frame, one equal chunk per rayon thread (at least
-/// [`BLOCK`] pixels; each output depends on its own input only, so the result is the same on
-/// any thread count).
+/// [`BLOCK`] pixels), the first on the calling thread ([`run_parts`]); each output depends
+/// on its own input only, so the result is the same on any thread count.
 pub fn lookup<T: Copy + Sync, O: From<T> + Default + Send>(
     table: &[T],
     acc: &[u32],
@@ -132,7 +132,6 @@ pub fn lookup<T: Copy + Sync, O: From<T> + Default + Send>(
         return lookup_block(table, acc, shift, out);
     }
     let avx2 = simd::avx2();
-    out.par_chunks_mut(chunk)
-        .zip(acc.par_chunks(chunk))
-        .for_each(|(o, a)| lookup_with(table, a, shift, o, avx2));
+    let parts: Vec<_> = out.chunks_mut(chunk).zip(acc.chunks(chunk)).collect();
+    run_parts(parts, |(o, a)| lookup_with(table, a, shift, o, avx2));
 }
