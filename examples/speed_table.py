@@ -43,18 +43,24 @@ def median_run(runs, key):
 
 
 def pipeline_table(igemu, runs, tmp):
-    print("| scene | fixed ms | float ms | fixed / float | per stage: fixed / float ms |")
-    print("|---|---|---|---|---|")
+    print(
+        "| scene | fixed ms | float ms | fixed / float | all runs: min-max, runs with fixed <= float "
+        "| per stage: fixed / float ms |"
+    )
+    print("|---|---|---|---|---|---|")
+    ratio = lambda r: r["timing"]["fixed_ms"] / r["timing"]["float_ms"]
     for scene in SCENES:
         rs = [render(igemu, scene, tmp, ["--no-local"]) for _ in range(runs)]
-        r = median_run(rs, lambda r: r["timing"]["fixed_ms"] / r["timing"]["float_ms"])
+        r = median_run(rs, ratio)
         t = r["timing"]
         stages = ", ".join(
             f"{s['name']} {s['fixed_ms']:.1f} / {s['float_ms']:.1f}" for s in r["stages"]
         )
+        rr = [ratio(x) for x in rs]
+        held = sum(x <= 1.0 for x in rr)
         print(
-            f"| {scene} | {t['fixed_ms']:.1f} | {t['float_ms']:.1f} | "
-            f"{t['fixed_ms'] / t['float_ms']:.2f} | {stages} |"
+            f"| {scene} | {t['fixed_ms']:.1f} | {t['float_ms']:.1f} | {ratio(r):.2f} | "
+            f"{min(rr):.2f}-{max(rr):.2f}, {held} of {runs} | {stages} |"
         )
 
 
@@ -102,6 +108,20 @@ def dither_lines():
     if p.returncode != 0:
         sys.exit(f"cargo bench --bench dither: exit {p.returncode}\n{p.stderr}")
     lines = p.stdout.splitlines()
+    # Criterion's estimates (the middle of `time: [low mid high]`) of the copy and LUT + Bayer.
+    est = {}
+    for i, l in enumerate(lines):
+        if "time:" in l:
+            name = l.split("time:")[0].strip() or lines[i - 1].strip()
+            mid = l.split("[")[1].split()[2:4]
+            est[name] = float(mid[0]) * {"ns": 1e-3, "µs": 1.0, "ms": 1e3}[mid[1]]
+    if "dither/copy/u32" in est and "dither/lut+bayer8" in est:
+        c, b = est["dither/copy/u32"], est["dither/lut+bayer8"]
+        print(
+            f"Criterion estimates: `dither/copy/u32` {c:.1f} us, `dither/lut+bayer8` {b:.1f} us: "
+            f"LUT + Bayer 8x8 at {c / b:.3f} of the copy's throughput."
+        )
+        print()
     start = next(i for i, l in enumerate(lines) if l.startswith("dither ratios"))
     print("```")
     for l in lines[start:]:

@@ -82,7 +82,21 @@ pub fn render(scene: &Scene, hw: &HwConfig, opts: RunOptions) -> Result<Render> 
 
 /// [`render`] reusing (and filling) `cache`: every stage whose key is cached is not run
 /// again. The result is identical to an uncached render.
+///
+/// The render runs on a thread of the global rayon pool (the caller waits), so every
+/// parallel part of a stage is joined from a pool thread: the thread that splits the work
+/// computes a part itself and takes back what no other thread has started, instead of
+/// sleeping until the pool is done (docs/speed.md).
 pub fn render_with(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RunOptions,
+    cache: Option<&Cache>,
+) -> Result<Render> {
+    rayon::scope(|_| render_on_pool(scene, hw, opts, cache))
+}
+
+fn render_on_pool(
     scene: &Scene,
     hw: &HwConfig,
     opts: RunOptions,
