@@ -35,6 +35,7 @@ pub mod hdl;
 pub mod output;
 pub mod perceptual;
 pub mod pipeline;
+pub mod rng;
 pub mod scene;
 pub mod stage;
 pub mod stage_id;

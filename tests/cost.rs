@@ -280,7 +280,7 @@ fn with_entry(im: &MemImage, w: usize, k: usize, v: u64) -> MemImage {
 
 #[test]
 fn a_corrupted_entry_width_depth_or_name_fails_the_pack_check() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let mut checked = 0;
     for c in cases() {
         for s in &c.render.steps {

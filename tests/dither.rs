@@ -206,7 +206,7 @@ fn floyd_steinberg_has_no_truncation_bias_near_black_and_white() {
 #[test]
 fn degenerate_image_shapes() {
     let s = 4;
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     for (w, h) in [(1u32, 1u32), (1, 37), (37, 1), (0, 5), (5, 0), (2, 2)] {
         let xs: Vec<u32> = (0..w * h)
             .map(|_| (rng.next_u64() % (255 << s)) as u32)
@@ -277,7 +277,7 @@ fn checkerboards_pass_through_and_keep_their_mean() {
 #[test]
 fn temporal_dither_period_mean_is_exact() {
     let (w, h, s, omax) = (40u32, 24u32, 4u32, 255u32);
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let xs: Vec<u32> = (0..w * h)
         .map(|_| (rng.next_u64() % ((omax << s) + 1) as u64) as u32)
         .collect();
@@ -469,6 +469,7 @@ fn slow_dark_ramp_contours_vanish_with_dither() {
 /// (kept here as the reference): codes, saturation counts and the reported signal, on the
 /// embedded scenes and on random frames, formats, output widths, masks and frames.
 mod kernels {
+    use super::Rng;
     use super::*;
     use igemu::fixed::SignalStats;
     use igemu::scene::Scene;
@@ -596,7 +597,7 @@ mod kernels {
             seed: u64,
         ) {
             let m = &masks()[mi];
-            let mut rng = Rng(seed | 1);
+            let mut rng = Rng::new(seed);
             let len = (width.max(1) * rows + tail % width.max(1)) as usize;
             let x: Vec<u32> = (0..len).map(|_| (rng.next_u64() as u32) >> vshift).collect();
             let omax = omax_of(oclass, orand);
@@ -637,7 +638,7 @@ mod kernels {
             let d = &dithers()[di];
             let m = d.mask.as_ref().unwrap();
             let omax = (1u32 << dac) - 1;
-            let mut rng = Rng(seed | 1);
+            let mut rng = Rng::new(seed);
             let x: Vec<u32> = (0..width * height).map(|_| (rng.next_u64() % ((omax as u64 + 2) << s)) as u32).collect();
             let frame = if d.cfg.temporal { d.cfg.frame } else { 0 };
             let (want, sat) = reference(&x, width, s, omax, m, frame);
@@ -659,7 +660,7 @@ mod kernels {
     /// in the portable build.
     #[test]
     fn large_frames_match_over_several_bands() {
-        let mut rng = Rng(99);
+        let mut rng = Rng::new(99);
         let pools: Vec<rayon::ThreadPool> = [1, 2, 3, 7]
             .iter()
             .map(|&n| {
@@ -777,6 +778,7 @@ mod kernels {
 /// Floyd-Steinberg with the residual range kept in locals: the same codes and signal as the
 /// per-value recording it replaced (that loop, kept here as the reference).
 mod diffusion_stats {
+    use super::Rng;
     use super::kernels::same_stats;
     use super::*;
     use igemu::fixed::{Quant, SignalStats, round_shift};
@@ -843,7 +845,7 @@ mod diffusion_stats {
                 error: QFormat::new(true, int, s + extra.max(1)),
                 serpentine,
             };
-            let mut rng = Rng(seed | 1);
+            let mut rng = Rng::new(seed);
             let x: Vec<u32> = (0..width * height)
                 .map(|_| (rng.next_u64() % (((p.omax as u64) + 2) << s)) as u32)
                 .collect();

@@ -101,7 +101,7 @@ fn random_image(rng: &mut Rng, w: usize, h: usize) -> Img {
 
 #[test]
 fn theorem_additive_layered_within_p_on_random_depth_images() {
-    let mut rng = Rng(0x05ee_dd0f);
+    let mut rng = Rng::new(0x05ee_dd0f);
     for &pv in &[0.05, 0.1, 0.2, 0.3] {
         let mut worst = (0.0f64, 0.0f64);
         for _ in 0..4 {
@@ -210,7 +210,7 @@ fn theorem_on_default_scene_for_several_p_and_composited_departure() {
 
 #[test]
 fn flat_field_any_code_any_depths_is_bit_identical() {
-    let mut rng = Rng(42);
+    let mut rng = Rng::new(42);
     for code in [0u32, 1, 2, 1000, 2047, 4094, WHITE] {
         let mut img = random_image(&mut rng, 36, 30);
         img.v.iter_mut().for_each(|v| *v = code);
@@ -227,7 +227,7 @@ fn flat_field_any_code_any_depths_is_bit_identical() {
 
 #[test]
 fn single_layer_equals_plain_2d_convolution() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let mut img = Img::new(33, 29, 0, 0.9); // sigma = 4.8 px
     img.v
         .iter_mut()
@@ -268,7 +268,7 @@ fn single_layer_equals_plain_2d_convolution() {
 
 #[test]
 fn energy_conserved_away_from_borders() {
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     let mut img = Img::new(64, 64, 0, 0.8); // sigma 3.6 px, M = 7
     for y in 20..44 {
         for x in 20..44 {

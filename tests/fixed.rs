@@ -425,16 +425,7 @@ fn quantize_f64_hard_cases() {
 // ---------------------------------------------------------------------------------------------
 // 3. Agreement with the `fixed` crate where the formats coincide.
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        // xorshift64*
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-}
+use igemu::rng::Rng;
 
 /// f64 inputs for a format: a fine grid (all ties of the format and beyond its range),
 /// plus seeded random doubles of every magnitude up to 2^(int_bits + 4).
@@ -445,12 +436,12 @@ fn f64_inputs(f: QFormat) -> Vec<f64> {
     for k in -span..span {
         v.push(k as f64 * step);
     }
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15);
     let top = f.int_bits as i32 + 4;
     for _ in 0..200_000 {
-        let m = (rng.next() >> 11) as f64 / (1u64 << 53) as f64;
-        let e = (rng.next() % 64) as i32 - 60 + top;
-        let s = if rng.next() & 1 == 0 { 1.0 } else { -1.0 };
+        let m = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let e = (rng.next_u64() % 64) as i32 - 60 + top;
+        let s = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
         v.push(s * m * 2f64.powi(e.min(top)));
     }
     v

@@ -90,7 +90,7 @@ fn coordinates_are_the_rounded_code_for_every_format_and_mode() {
         (10, 6, 8),
         (11, 12, 8),
     ];
-    let mut rng = Rng(0x1234_5678);
+    let mut rng = Rng::new(0x1234_5678);
     let (mut checked, mut ties) = (0, 0);
     for (int_bits, frac, n) in formats {
         for q in Quant::ALL {
@@ -130,7 +130,7 @@ fn full_white_is_the_top_integer_code() {
         });
         let white = ((1i64 << int_bits) - 1) << frac;
         // Intensities that are multiples of 2^-16 times a white of <= 16 bits are exact in f64.
-        let mut rng = Rng(int_bits as u64 * 31 + frac as u64);
+        let mut rng = Rng::new(int_bits as u64 * 31 + frac as u64);
         let mut objects = tri(
             [[1.0, 1.0, 0.5], [20.0, 2.0, 0.5], [5.0, 18.0, 0.5]],
             [1.0, 0.0, 0.5],
@@ -173,7 +173,7 @@ fn full_white_is_the_top_integer_code() {
 
 #[test]
 fn stage_local_error_is_at_most_half_an_lsb_when_rounding_to_nearest() {
-    let mut rng = Rng(99);
+    let mut rng = Rng::new(99);
     let mut objects = String::new();
     for _ in 0..40 {
         let mut v = || {
@@ -339,7 +339,7 @@ fn tokens_are_vertices_per_primitive_surfaces_first_then_light_points() {
     );
     let l = line([2.0, 30.0, 0.5], [30.0, 35.0, 0.5], 0.5, 1.0);
     let p = point(40.0, 10.0, 0.5, 0.5, 1.0);
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     for round in 0..20 {
         let kinds: Vec<u64> = if round == 0 {
             vec![1, 3, 2, 1, 3, 2]
@@ -430,7 +430,7 @@ proptest! {
     /// Every sample the raster covers lies in its primitive's footprint (and a binned tile).
     #[test]
     fn footprints_contain_every_covered_sample(seed in any::<u64>(), n_log in 0u32..4, filter in 0usize..3, sub in 0u32..3) {
-        let mut rng = Rng(seed | 1);
+        let mut rng = Rng::new(seed);
         let mut objects = String::new();
         for k in 0..1 + rng.next_u64() % 6 {
             // Large, small and sliver triangles, on and off the screen (inside the guard band).

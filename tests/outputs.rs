@@ -77,7 +77,7 @@ fn a_killed_render_leaves_the_old_png_or_a_complete_new_one() {
     let t = Instant::now();
     assert!(render().wait().unwrap().success());
     let full = t.elapsed().as_secs_f64();
-    let mut rng = Rng(0x5eed_4b11);
+    let mut rng = Rng::new(0x5eed_4b11);
     let (mut kept_old, mut got_new) = (0, 0);
     for trial in 0..12 {
         std::fs::write(&out, &old).unwrap();

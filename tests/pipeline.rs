@@ -86,7 +86,7 @@ proptest! {
     /// (c) No panic on random valid scenes and configurations; (d) deterministic.
     #[test]
     fn random_scenes_never_panic(seed in any::<u64>(), n_log in 1u32..4, filter in 0usize..3, acc in 8u32..14, dac in 6u32..11) {
-        let mut rng = Rng(seed | 1);
+        let mut rng = Rng::new(seed);
         let mut objects = String::new();
         for _ in 0..(rng.next_u64() % 12) {
             let mut p = || [rng.range(-40.0, 80.0), rng.range(-40.0, 80.0), rng.range(0.0, 1.0)];

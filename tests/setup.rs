@@ -134,7 +134,7 @@ fn edges(t: &TriSetup) -> Vec<SideEdge> {
 
 #[test]
 fn shared_edges_have_identical_constants_on_opposite_sides() {
-    let mut rng = Rng(21);
+    let mut rng = Rng::new(21);
     let mut shared = 0;
     for round in 0..20_000 {
         let (n, sub) = GRIDS[round % GRIDS.len()];
@@ -230,7 +230,7 @@ fn area2(v: &[QVertex; 3]) -> i64 {
 
 #[test]
 fn lines_become_two_triangles_of_the_lines_width() {
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     for round in 0..5000 {
         let (n, sub) = GRIDS[round % GRIDS.len()];
         let g = Grid::new(n, sub, 64, 64);
@@ -334,7 +334,7 @@ fn nearest(num: i128, den: i128) -> i128 {
 
 #[test]
 fn planes_interpolate_exactly_and_round_gradients_to_nearest() {
-    let mut rng = Rng(77);
+    let mut rng = Rng::new(77);
     let mut c = move || (rng.next_u64() % 4000) as i64 - 1000;
     let mut checked = 0;
     while checked < 3000 {
@@ -383,7 +383,7 @@ fn planes_interpolate_exactly_and_round_gradients_to_nearest() {
 
 #[test]
 fn light_points_cover_the_samples_whose_centres_are_in_their_square() {
-    let mut rng = Rng(8);
+    let mut rng = Rng::new(8);
     for round in 0..20_000 {
         let (n, sub) = GRIDS[round % GRIDS.len()];
         let g = Grid::new(n, sub, 64, 64);

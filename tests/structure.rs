@@ -14,7 +14,9 @@ use std::path::{Path, PathBuf};
 
 /// Layers, bottom first: a module may import its own layer and the layers below.
 const LAYERS: &[&[&str]] = &[
-    &["error", "fixed", "fnv", "stage_id", "files", "output"],
+    &[
+        "error", "fixed", "fnv", "rng", "stage_id", "files", "output",
+    ],
     &["scene"],
     &["config"],
     &["stage"],

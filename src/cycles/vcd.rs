@@ -1,4 +1,5 @@
-//! A VCD (IEEE 1364 value change dump) writer for the cycle simulation, for GTKWave.
+//! The VCD (IEEE 1364 value change dump) trace of the cycle simulation, for GTKWave, written
+//! with the `vcd` crate's writer.
 //!
 //! One time unit is one clock cycle (`$timescale 1 ns`: read "ns" as "cycles"). Per stage
 //! `<stage>_state` (2 bits: 0 idle, 1 busy, 2 stalled, 3 starved) and, for a stage that
@@ -7,6 +8,7 @@
 
 use super::{State, Workload};
 use std::io::{self, Write};
+use vcd::{IdCode, SimulationCommand, TimescaleUnit, Value, VarType};
 
 /// Streams value changes to `out`.
 pub struct VcdWriter<W: Write> {
@@ -18,30 +20,55 @@ pub struct VcdWriter<W: Write> {
     err: Option<io::Error>,
 }
 
-fn id(i: usize, fifo: bool) -> String {
-    let c = (b'!' + (2 * i + fifo as usize) as u8) as char;
-    c.to_string()
+/// The identifier code of stage `i`'s state (or FIFO) signal: `!`, `"`, `#`, ... as before
+/// the `vcd` crate wrote the traces (stage `i` owns codes `2i` and `2i + 1`).
+fn id(i: usize, fifo: bool) -> IdCode {
+    IdCode::from((2 * i + fifo as usize) as u64)
+}
+
+/// The bits of `v`, most significant first, without leading zeros (`0` is one bit).
+fn bits(v: u64) -> impl Iterator<Item = Value> {
+    let n = (64 - v.leading_zeros()).max(1);
+    (0..n).rev().map(move |k| {
+        if v >> k & 1 == 1 {
+            Value::V1
+        } else {
+            Value::V0
+        }
+    })
 }
 
 impl<W: Write> VcdWriter<W> {
     /// Writes the header for the stages of `w` (a `_fifo` signal for each stage with a FIFO).
     pub fn new(mut out: W, w: &Workload, clock_mhz: f64) -> io::Result<Self> {
         let fifo: Vec<bool> = (0..w.stages.len()).map(|i| w.has_fifo(i)).collect();
-        writeln!(
-            out,
-            "$comment igemu cycle trace: 1 time unit = 1 clock cycle at {clock_mhz} MHz; state 0 idle, 1 busy, 2 stalled, 3 starved $end"
-        )?;
-        writeln!(out, "$timescale 1 ns $end")?;
-        writeln!(out, "$scope module igemu $end")?;
+        let mut v = vcd::Writer::new(&mut out);
+        v.comment(&format!(
+            "igemu cycle trace: 1 time unit = 1 clock cycle at {clock_mhz} MHz; state 0 idle, 1 busy, 2 stalled, 3 starved"
+        ))?;
+        v.timescale(1, TimescaleUnit::NS)?;
+        v.add_module("igemu")?;
         for (i, s) in w.stages.iter().enumerate() {
             let name = s.id.name();
-            writeln!(out, "$var wire 2 {} {name}_state $end", id(i, false))?;
+            v.var_def(
+                VarType::Wire,
+                2,
+                id(i, false),
+                &format!("{name}_state"),
+                None,
+            )?;
             if fifo[i] {
-                writeln!(out, "$var wire 32 {} {name}_fifo $end", id(i, true))?;
+                v.var_def(
+                    VarType::Wire,
+                    32,
+                    id(i, true),
+                    &format!("{name}_fifo"),
+                    None,
+                )?;
             }
         }
-        writeln!(out, "$upscope $end")?;
-        writeln!(out, "$enddefinitions $end")?;
+        v.upscope()?;
+        v.enddefinitions()?;
         Ok(Self {
             out,
             fifo,
@@ -53,6 +80,9 @@ impl<W: Write> VcdWriter<W> {
     }
 
     fn write_cycle(&mut self, t: u64, states: &[State], occ: &[u32]) -> io::Result<()> {
+        // The crate's writer only formats commands: borrowing the sink per cycle keeps `W`
+        // ours to hand back in `finish` (it has no `into_inner`).
+        let mut v = vcd::Writer::new(&mut self.out);
         let mut stamped = false;
         for i in 0..states.len() {
             let s = states[i] as u8;
@@ -60,23 +90,23 @@ impl<W: Write> VcdWriter<W> {
             let changed_s = s != self.last_state[i];
             let changed_o = self.fifo[i] && o != self.last_occ[i];
             if (changed_s || changed_o) && !stamped {
-                writeln!(self.out, "#{t}")?;
+                v.timestamp(t)?;
                 if !self.started {
-                    writeln!(self.out, "$dumpvars")?;
+                    v.begin(SimulationCommand::Dumpvars)?;
                 }
                 stamped = true;
             }
             if changed_s {
-                writeln!(self.out, "b{:b} {}", s, id(i, false))?;
+                v.change_vector(id(i, false), bits(s.into()))?;
                 self.last_state[i] = s;
             }
             if changed_o {
-                writeln!(self.out, "b{:b} {}", o, id(i, true))?;
+                v.change_vector(id(i, true), bits(o.into()))?;
                 self.last_occ[i] = o;
             }
         }
         if stamped && !self.started {
-            writeln!(self.out, "$end")?;
+            v.end()?;
             self.started = true;
         }
         Ok(())
@@ -96,7 +126,7 @@ impl<W: Write> VcdWriter<W> {
         if let Some(e) = self.err.take() {
             return Err(e);
         }
-        writeln!(self.out, "#{total}")?;
+        vcd::Writer::new(&mut self.out).timestamp(total)?;
         self.out.flush()?;
         Ok(self.out)
     }

@@ -110,23 +110,5 @@ pub fn parse_verdict(out: &str) -> Option<Verdict> {
     found
 }
 
-/// A small deterministic generator (splitmix64) for random vectors.
-pub(crate) struct Rng(pub(crate) u64);
-
-impl Rng {
-    pub(crate) fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    pub(crate) fn bits(&mut self, b: u32) -> u64 {
-        if b == 0 {
-            0
-        } else {
-            self.next() >> (64 - b.min(64))
-        }
-    }
-}
+/// The seeded generator of the random vectors.
+pub(crate) use crate::rng::Rng;

@@ -22,7 +22,9 @@ pub const TESTBENCH: &str = "tb_log_adder_exhaustive";
 /// The signature file the exhaustive testbench reads.
 pub const SIG_FILE: &str = "log_sig.hex";
 
-/// FNV-1a offset basis (32 bit).
+/// FNV-1a offset basis (32 bit). This 32-bit fold is a checksum the Verilog testbench
+/// computes too, step for step, not an id or a cache key: it stays written out here (the
+/// project's ids and keys use `crate::fnv`, on the `fnv` crate).
 pub const FNV_BASIS: u32 = 0x811c_9dc5;
 
 /// One FNV-1a step over an output word: `(h ^ s) * 16777619 mod 2^32`. A bijection of `h`

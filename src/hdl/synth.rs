@@ -32,18 +32,6 @@ impl SynthCells {
     }
 }
 
-/// FNV-1a 64 of the synthesis inputs.
-pub(crate) fn fnv(parts: &[&[u8]]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for p in parts {
-        for &b in *p {
-            h = (h ^ b as u64).wrapping_mul(0x100_0000_01b3);
-        }
-        h = (h ^ 0xff).wrapping_mul(0x100_0000_01b3);
-    }
-    h
-}
-
 /// Parses yosys `stat` output.
 pub fn parse_stat(module: &str, text: &str) -> Option<SynthCells> {
     let mut cells = None;
@@ -78,7 +66,7 @@ pub fn synth(b: &Bench, cache: &Path) -> Result<SynthCells> {
     let src = std::fs::read(&rtl).map_err(|e| io(&rtl, e))?;
     let params: String = b.params.iter().map(|(k, v)| format!("{k}={v};")).collect();
     let roms: String = b.roms.iter().map(|(n, r)| format!("{n}:{r:?};")).collect();
-    let h = fnv(&[&src, params.as_bytes(), roms.as_bytes()]);
+    let h = crate::fnv::fnv1a_parts(&[&src, params.as_bytes(), roms.as_bytes()]);
     let dir: PathBuf = cache.join(format!("{}-{h:016x}", b.module));
     let stat = dir.join("stat.txt");
     if let Some(mut c) = std::fs::read_to_string(&stat)

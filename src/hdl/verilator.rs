@@ -113,7 +113,7 @@ pub fn build(
     let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
     let (tb_src, rtl_src, params) = (read(&tb_v)?, read(&rtl_v)?, read(&dir.join("params.vh"))?);
     let ver = version();
-    let h = super::synth::fnv(&[
+    let h = crate::fnv::fnv1a_parts(&[
         &tb_src,
         &rtl_src,
         &params,
@@ -166,7 +166,7 @@ pub fn build(
     // keeps it) before the model's own C++ is compiled.
     let runtime = cache.join(format!(
         "runtime-{:016x}",
-        super::synth::fnv(&[FLAGS.join(" ").as_bytes(), ver.as_bytes()])
+        crate::fnv::fnv1a_parts(&[FLAGS.join(" ").as_bytes(), ver.as_bytes()])
     ));
     let had_runtime = runtime_objects(&runtime)
         .into_iter()

@@ -59,22 +59,9 @@ pub fn hw(preset: &str, f: impl FnOnce(&mut HwConfig)) -> HwConfig {
     h
 }
 
-/// A small deterministic generator (xorshift64*), so tests need no extra crate.
-pub struct Rng(pub u64);
-
-impl Rng {
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+/// The seeded generator of the tests: the library's (`rand`'s ChaCha8 from a `u64` seed).
+#[allow(unused_imports)]
+pub use igemu::rng::Rng;
 
 /// Runs the `igemu` binary: (exit code, stdout, stderr).
 pub fn igemu(args: &[&str]) -> (i32, String, String) {

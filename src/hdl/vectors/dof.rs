@@ -253,7 +253,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
             for len in [1, 2, half.min(maxlen), full, maxlen] {
                 for pos in [0, len / 2, len - 1] {
                     for fill in 0..3 {
-                        let mut r2 = Rng(rng.next());
+                        let mut r2 = Rng::new(rng.next_u64());
                         let mut on = |_: usize| match fill {
                             0 => (0, 0),
                             1 => ((1u64 << xb) - 1, (1u64 << ab) - 1),
@@ -269,14 +269,14 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     }
     b.sources.push(("edge", edge));
     for _ in 0..RANDOM {
-        let l = layers[rng.next() as usize % layers.len()];
-        let pass = rng.next() & 1;
+        let l = layers[rng.next_u64() as usize % layers.len()];
+        let pass = rng.next_u64() & 1;
         let (xb, ab) = in_bits(pass);
-        let len = 1 + rng.next() as usize % maxlen;
-        let pos = rng.next() as usize % len;
+        let len = 1 + rng.next_u64() as usize % maxlen;
+        let pos = rng.next_u64() as usize % len;
         // Half the vectors near the top of the input range (saturation).
-        let top = rng.next() & 1 == 1;
-        let mut r2 = Rng(rng.next());
+        let top = rng.next_u64() & 1 == 1;
+        let mut r2 = Rng::new(rng.next_u64());
         let v = window(rng, pass, l, pos, len, &mut |_| {
             let x = r2.bits(xb);
             let x = if top { x | (1u64 << (xb - 1)) } else { x };

@@ -89,7 +89,7 @@ pub fn vectors(stage: StageId, scene: &Scene, hw: &HwConfig) -> Result<Bench> {
             ),
         ));
     }
-    let mut rng = Rng(0x1D1_5EED ^ frame.format.total_bits() as u64);
+    let mut rng = Rng::new(0x1D1_5EED ^ frame.format.total_bits() as u64);
     let mut b = Bench {
         stage,
         module,
