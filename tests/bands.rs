@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{Rng, hw, line, point, scene, tri};
+use common::{Rng, hw, random_objects, scene};
 use igemu::config::{FilterKind, HwConfig};
 use igemu::pipeline::{self, Render, render};
 use igemu::scene::Scene;
@@ -239,16 +239,7 @@ proptest! {
     #[test]
     fn random_scenes_render_the_same_in_bands(seed in any::<u64>(), n_log in 0u32..4, filter in 0usize..3, tile_log in 2u32..5, rows in 1u32..40) {
         let mut rng = Rng::new(seed);
-        let mut objects = String::new();
-        for _ in 0..(1 + rng.next_u64() % 12) {
-            let mut p = || [rng.range(-40.0, 80.0), rng.range(-40.0, 80.0), rng.range(0.0, 1.0)];
-            let (a, b, c) = (p(), p(), p());
-            objects += &tri([a, b, c], [0.2, 0.9, 1.3]);
-        }
-        for _ in 0..(rng.next_u64() % 4) {
-            objects += &point(rng.range(-5.0, 50.0), rng.range(-5.0, 50.0), rng.range(0.0, 1.0), rng.range(0.0, 2.0), 1.0 + (rng.next_u64() % 3) as f64);
-            objects += &line([rng.range(-5.0, 50.0), rng.range(-5.0, 50.0), 0.5], [rng.range(-5.0, 50.0), rng.range(-5.0, 50.0), 0.5], 0.7, 1.0);
-        }
+        let objects = random_objects(&mut rng, 1);
         let s = scene(40, 30, rng.range(0.0, 1.0), &objects);
         let h = hw("linear12", |h| {
             h.raster.samples = 1 << n_log;

@@ -51,6 +51,38 @@ pub fn line(a: [f64; 3], b: [f64; 3], i: f64, width: f64) -> String {
     )
 }
 
+/// The `[[object]]` blocks of a random 40x30 scene: `min_tris` plus up to 11 more triangles
+/// anywhere around the screen, then up to 3 light points and lines, from `rng`.
+pub fn random_objects(rng: &mut Rng, min_tris: u64) -> String {
+    let mut objects = String::new();
+    for _ in 0..(min_tris + rng.next_u64() % 12) {
+        let mut p = || {
+            [
+                rng.range(-40.0, 80.0),
+                rng.range(-40.0, 80.0),
+                rng.range(0.0, 1.0),
+            ]
+        };
+        let (a, b, c) = (p(), p(), p());
+        objects += &tri([a, b, c], [0.2, 0.9, 1.3]);
+    }
+    for _ in 0..(rng.next_u64() % 4) {
+        let (x, y, z, i) = (
+            rng.range(-5.0, 50.0),
+            rng.range(-5.0, 50.0),
+            rng.range(0.0, 1.0),
+            rng.range(0.0, 2.0),
+        );
+        objects += &point(x, y, z, i, 1.0 + (rng.next_u64() % 3) as f64);
+        let (a, b) = (
+            [rng.range(-5.0, 50.0), rng.range(-5.0, 50.0), 0.5],
+            [rng.range(-5.0, 50.0), rng.range(-5.0, 50.0), 0.5],
+        );
+        objects += &line(a, b, 0.7, 1.0);
+    }
+    objects
+}
+
 /// A preset with changes.
 pub fn hw(preset: &str, f: impl FnOnce(&mut HwConfig)) -> HwConfig {
     let mut h = HwConfig::preset(preset).expect("preset");

@@ -202,12 +202,10 @@ pub fn apply_ordered_with(
     if run != Run::Parallel || band >= height {
         return rows(0, out, x);
     }
-    let parts: Vec<_> = out.chunks_mut(w * band).zip(x.chunks(w * band)).collect();
-    run_parts(parts.into_iter().enumerate().collect(), |(b, (o, xb))| {
-        rows(b * band, o, xb)
-    })
-    .into_iter()
-    .sum()
+    let parts = out.chunks_mut(w * band).zip(x.chunks(w * band)).enumerate();
+    run_parts(parts.collect(), |(b, (o, xb))| rows(b * band, o, xb))
+        .into_iter()
+        .sum()
 }
 
 /// Smallest band of [`apply_ordered`] handed to a thread, in pixels (rounded up to rows).
