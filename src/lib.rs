@@ -32,6 +32,7 @@ pub mod files;
 pub mod fixed;
 pub mod fnv;
 pub mod hdl;
+pub mod html;
 pub mod output;
 pub mod perceptual;
 pub mod pipeline;

@@ -317,6 +317,16 @@ fn an_output_that_is_an_input_is_refused_and_the_input_is_unchanged() {
             sc.clone(),
         ),
         (
+            vec!["sweep", &sc, "--grid", &g, "--out", &rows, "--html", &g],
+            "--html",
+            g.clone(),
+        ),
+        (
+            vec!["render", &sc, "-o", &png, "--html", &sc],
+            "--html",
+            sc.clone(),
+        ),
+        (
             vec![
                 "hdl", "vectors", "--stage", "gamma", "--hw", &bh, "--out", &bd,
             ],
@@ -354,6 +364,19 @@ fn two_outputs_on_one_path_are_refused() {
             "--diff-out",
         ),
         (vec!["render", "-o", &png, "--dump", &dump], "--dump"),
+        (vec!["render", "-o", &png, "--html", &dotdot], "--html"),
+        (
+            vec![
+                "sweep",
+                "--grid",
+                "examples/grid.toml",
+                "--out",
+                &png,
+                "--html",
+                &png,
+            ],
+            "--html",
+        ),
         (
             vec![
                 "render",

@@ -22,7 +22,7 @@ const LAYERS: &[&[&str]] = &[
     &["stage"],
     &["compare", "perceptual", "cycles", "cost", "truth"],
     &["pipeline"],
-    &["analysis", "sweep", "hdl"],
+    &["analysis", "sweep", "hdl", "html"],
 ];
 
 fn layer_of(module: &str) -> Option<usize> {

@@ -68,7 +68,7 @@ fn plot_error(path: &str, e: impl std::fmt::Display) -> Error {
 }
 
 /// Registers the embedded font once (plotters keeps a process-wide font table).
-fn font() {
+pub(crate) fn font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         // DejaVu Sans is a valid TrueType font; a failure here would leave plotters
@@ -105,8 +105,22 @@ pub fn write(rows: &[Row], axes: &[Axis], path: &str) -> Result<()> {
     })
 }
 
+/// The plot of [`write`] as an SVG document (for the HTML report).
+pub fn svg(rows: &[Row], axes: &[Axis]) -> Result<String> {
+    let error = axes.first().copied().unwrap_or(Axis::Error);
+    let xs = panel_axes(axes);
+    font();
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size(xs.len())).into_drawing_area();
+        draw(&root, rows, error, &xs).map_err(|e| plot_error("<html>", e))?;
+        root.present().map_err(|e| plot_error("<html>", e))?;
+    }
+    Ok(text)
+}
+
 /// The range of `v` with a 5 % margin (a unit range around a single value).
-fn padded(v: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+pub(crate) fn padded(v: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     let (lo, hi) = v
         .filter(|x| x.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
@@ -124,7 +138,7 @@ fn padded(v: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
 }
 
 /// A tick label: plain for moderate magnitudes, scientific otherwise.
-fn tick(v: f64) -> String {
+pub(crate) fn tick(v: f64) -> String {
     let a = v.abs();
     if a == 0.0 {
         "0".into()

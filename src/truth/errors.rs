@@ -137,13 +137,7 @@ pub fn dac_error(mean: &[f64], se: &[f64], scene: &Scene, hw: &HwConfig) -> Vec<
 /// frame's depth codes (the background's included when it shows).
 pub fn edge_band(scene: &Scene, hw: &HwConfig, frame: &Frame) -> (Vec<bool>, usize) {
     let (w, h) = (frame.width as usize, frame.height as usize);
-    let Some(lens) = LensMap::from_camera(
-        &scene.camera,
-        frame.height,
-        hw.visibility.z.format.frac_bits,
-        hw.dof.sigma,
-        hw.dof.sigma_rom_bits,
-    ) else {
+    let Some(lens) = LensMap::of(scene, hw, frame.height) else {
         return (vec![false; w * h], 0);
     };
     let mut keys = frame.depth.clone();

@@ -30,7 +30,6 @@ fn bits(v: u128) -> u32 {
 /// Fills `b` with the dof row MAC's parameters, coefficient ROM and vectors.
 pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
     let p = &hw.dof;
-    let z_frac = hw.visibility.z.format.frac_bits;
     if !matches!(scene.camera.lens, Lens::ThinLens { .. }) {
         return Err(Error::File(FileError {
             file: scene.name.clone(),
@@ -63,14 +62,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     let (_, taps) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Accumulate)?;
     let frame = &taps.fixed.frame().frame;
     let (w, h) = (frame.width as usize, frame.height as usize);
-    let lens = LensMap::from_camera(
-        &scene.camera,
-        frame.height,
-        z_frac,
-        p.sigma,
-        p.sigma_rom_bits,
-    )
-    .expect("a thin-lens camera, checked above");
+    let lens = LensMap::of(scene, hw, frame.height).expect("a thin-lens camera, checked above");
     let n2 = hw.raster.samples * hw.raster.samples;
     let plan = plan_layers(&frame.depth, &frame.coverage, n2, &lens, p)
         .map_err(|m| bad(hw, "dof.max_half_size", m))?;

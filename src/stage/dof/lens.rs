@@ -50,6 +50,23 @@ pub struct LensMap {
 }
 
 impl LensMap {
+    /// The lens map of a scene's camera on `hw` (depth codes of the visibility stage's z,
+    /// `dof.sigma`, `dof.sigma_rom_bits`) for an image `height` pixels high; `None` for a
+    /// pinhole camera.
+    pub fn of(
+        scene: &crate::scene::Scene,
+        hw: &crate::config::HwConfig,
+        height: u32,
+    ) -> Option<Self> {
+        Self::from_camera(
+            &scene.camera,
+            height,
+            hw.visibility.z.format.frac_bits,
+            hw.dof.sigma,
+            hw.dof.sigma_rom_bits,
+        )
+    }
+
     /// From a thin-lens camera, the image height, the depth codes' fraction bits, the sigma
     /// form and the sigma ROM's index bits; `None` for a pinhole camera.
     pub fn from_camera(

@@ -152,14 +152,8 @@ impl Stage for Dof {
             }
         };
         let frame = &input.frame;
-        let lens = LensMap::from_camera(
-            &cx.scene.camera,
-            frame.height,
-            hw.visibility.z.format.frac_bits,
-            hw.dof.sigma,
-            hw.dof.sigma_rom_bits,
-        )
-        .expect("the plan runs dof for a thin lens only");
+        let lens = LensMap::of(cx.scene, hw, frame.height)
+            .expect("the plan runs dof for a thin lens only");
         let (plan, out, mut facts) = match hw.dof.kind {
             DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
             DofKind::Luminance => run(&Luminance, cx, frame, &lens, MethodPlan::Luminance)?,

@@ -39,6 +39,9 @@ pub struct RenderArgs {
     /// Write the JSON report to a file.
     #[arg(long)]
     pub report: Option<String>,
+    /// Write a self-contained HTML report: images side by side, plan, stage table, signals, plots.
+    #[arg(long, value_name = "REPORT.html")]
+    pub html: Option<String>,
     /// Skip the stage-local comparisons (faster).
     #[arg(long)]
     pub no_local: bool,
@@ -65,6 +68,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         ("--banding-out", &a.banding_out),
         ("--truth-out", &a.truth_out),
         ("--report", &a.report),
+        ("--html", &a.html),
     ] {
         outs.extend(p.as_deref().map(|p| (flag, p)));
     }
@@ -87,9 +91,10 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
             ),
         ));
     }
+    let hw = a.s.hw()?;
     let r = pipeline::render(
         &scene,
-        &a.s.hw()?,
+        &hw,
         a.s.opts(RunOptions {
             stage_local: !a.no_local,
             dof_reference: a.dof_reference,
@@ -148,6 +153,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
     let json = serde_json::to_string_pretty(&r.report).expect("serialisable");
     if let Some(p) = &a.report {
         output::write_file(p, &json)?;
+    }
+    if let Some(p) = &a.html {
+        output::write_file(p, &igemu::html::render_page(&scene, &hw, &r, p)?)?;
     }
     if a.json {
         outln!("{json}");

@@ -2,10 +2,11 @@
 //! line each (resumable, shardable, parallel), and print the Pareto front.
 
 use crate::args::{TruthArgs, arg_error, load_scene};
-use crate::guard::Inputs;
+use crate::guard::{Inputs, distinct_outputs};
 use crate::out::{out, outln};
 use clap::Args;
 use igemu::error::Error;
+use igemu::output;
 use igemu::pipeline;
 use igemu::scene::Scene;
 use std::io::Write;
@@ -39,6 +40,9 @@ pub struct SweepArgs {
     /// Plot error vs cost and error vs throughput with the Pareto fronts (SVG or PNG, by extension).
     #[arg(long, value_name = "PARETO.svg|png")]
     pub plot: Option<String>,
+    /// Write a self-contained HTML report: the Pareto plot and every row in a sortable table, the front highlighted.
+    #[arg(long, value_name = "SWEEP.html")]
+    pub html: Option<String>,
     /// Add small-object flicker metrics to every row: the flicker scene swept over PHASES x PHASES sub-pixel phases (2..=64; `igemu flicker` uses 32).
     #[arg(long, value_name = "PHASES")]
     pub flicker: Option<u32>,
@@ -63,6 +67,13 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     if let Some(p) = &a.plot {
         inputs.check("--plot", p)?;
     }
+    if let Some(p) = &a.html {
+        inputs.check("--html", p)?;
+    }
+    let mut outs = vec![("--out", a.out.as_str())];
+    outs.extend(a.plot.as_deref().map(|p| ("--plot", p)));
+    outs.extend(a.html.as_deref().map(|p| ("--html", p)));
+    distinct_outputs(&outs)?;
     let shard = match &a.shard {
         Some(s) => Some(grid::Shard::parse(s).map_err(|m| arg_error("--shard", m))?),
         None => None,
@@ -167,6 +178,9 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     let rows = &summary.rows;
     if let Some(p) = &a.plot {
         sweep::plot::write(rows, &axes, p)?;
+    }
+    if let Some(p) = &a.html {
+        output::write_file(p, &igemu::html::sweep_page(rows, &axes, &a.grid, p)?)?;
     }
     let front = pareto::front(rows, &axes);
     outln!(

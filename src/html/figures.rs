@@ -1,0 +1,239 @@
+//! The plots of a render's HTML report, from the [`Render`]: the gamma LUT's transfer (the
+//! paper's Fig. 6), the histogram of code differences, the stage timeline of the cycle
+//! simulation and sigma against depth.
+
+use super::images::{self, Picture};
+use super::plots::{self, Frame, Mark, Series};
+use super::render::{LayerNote, dof_layers};
+use super::timeline::timeline;
+use crate::config::HwConfig;
+use crate::pipeline::Render;
+use crate::pipeline::report::gamma_spec;
+use crate::scene::Scene;
+use crate::stage::StageId;
+use crate::stage::dof::LensMap;
+use crate::stage::logdomain::log_code;
+use plotters::style::RGBColor;
+
+/// Drawing fails only on a plotters error; the caller names the report file.
+pub type Result<T> = std::result::Result<T, String>;
+
+fn svg_picture(title: &str, caption: String, svg: String, size: (u32, u32)) -> Picture {
+    Picture {
+        title: title.into(),
+        caption,
+        uri: images::svg_uri(&svg),
+        width: size.0,
+        height: size.1,
+        legend: Vec::new(),
+    }
+}
+
+fn plot_error(what: &str, e: String) -> String {
+    format!("cannot draw the {what} plot: {e}")
+}
+
+const SIZE: (u32, u32) = (620, 400);
+
+/// Every plot of render `r`.
+pub fn plots(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
+    let mut v = Vec::new();
+    // The gamma LUT transfer (the paper's Fig. 6): this render's LUT, the ideal I^(1/gamma)
+    // of a linear code, and for a log code of the scene's contrast the LUT of eq. 15 with
+    // the brightness its codes stand for.
+    let spec = gamma_spec(scene, hw);
+    let n = 256;
+    let xs = (0..=n).map(|i| i as f64 / n as f64);
+    let mut series = vec![Series {
+        name: format!("linear code: I^(1/{})", fmt_gamma(spec.exponent)),
+        colour: RGBColor(31, 119, 180),
+        mark: Mark::Line,
+        points: xs.clone().map(|x| (x, spec.power(x))).collect(),
+    }];
+    if let Ok(code) = log_code(scene, hw) {
+        series.push(Series {
+            name: format!(
+                "{}-bit log code, K = {}: LUT ((K^L - 1)/(K - 1))^(1/gamma)",
+                code.bits, code.k
+            ),
+            colour: RGBColor(214, 39, 40),
+            mark: Mark::Line,
+            points: xs
+                .clone()
+                .map(|l| (l, spec.power(code.linear_of_log(l))))
+                .collect(),
+        });
+        series.push(Series {
+            name: "log code: relative brightness B/Bmax".into(),
+            colour: RGBColor(255, 127, 14),
+            mark: Mark::Line,
+            points: xs.map(|l| (l, code.linear_of_log(l))).collect(),
+        });
+    }
+    if let Some(table) = lut_table(r) {
+        let (last, max) = (
+            (table.len() - 1).max(1) as f64,
+            *table.iter().max().unwrap_or(&1) as f64,
+        );
+        let step = (table.len() / 512).max(1);
+        series.push(Series {
+            name: format!("this render's LUT ({} entries), DAC / max", table.len()),
+            colour: RGBColor(0, 0, 0),
+            mark: Mark::Dots(2),
+            points: (0..table.len())
+                .step_by(step)
+                .map(|a| (a as f64 / last, table[a] as f64 / max.max(1.0)))
+                .collect(),
+        });
+    }
+    let f = Frame {
+        title: "gamma LUT transfer".into(),
+        x: "input code / full white".into(),
+        y: "output / full scale".into(),
+        size: SIZE,
+    };
+    let svg = plots::curves(&f, &series).map_err(|e| plot_error("LUT", e))?;
+    v.push(svg_picture(
+        &f.title,
+        "the LUT's output against its input, both normalised (the paper's Fig. 6)".into(),
+        svg,
+        SIZE,
+    ));
+    // The histogram of end-to-end code differences.
+    let bars: Vec<(i64, u64)> = r
+        .report
+        .end_to_end
+        .codes
+        .histogram
+        .iter()
+        .map(|(&d, &n)| (d as i64, n))
+        .collect();
+    let f = Frame {
+        title: "DAC code differences".into(),
+        x: "fixed minus reference, codes".into(),
+        y: "pixels".into(),
+        size: SIZE,
+    };
+    let svg = plots::histogram(&f, &bars).map_err(|e| plot_error("histogram", e))?;
+    v.push(svg_picture(
+        &f.title,
+        "pixels per difference, logarithmic count".into(),
+        svg,
+        SIZE,
+    ));
+    // The stage timeline of the cycle simulation.
+    let t = timeline(&r.workload, 400);
+    let names: Vec<String> = r
+        .report
+        .cycles
+        .stages
+        .iter()
+        .map(|s| s.name.clone())
+        .collect();
+    let size = (1240, 90 + 46 * names.len() as u32);
+    let f = Frame {
+        title: "cycle simulation: stage states over the frame".into(),
+        x: format!("cycle (bins of {})", t.bin),
+        y: String::new(),
+        size,
+    };
+    let svg = plots::timeline(&f, &t, &names).map_err(|e| plot_error("timeline", e))?;
+    v.push(svg_picture(
+        &f.title,
+        "per stage, the share of each bin's cycles busy, stalled (the next FIFO full), starved (waiting for input) and idle".into(),
+        svg,
+        size,
+    ));
+    if let Some(p) = sigma_plot(scene, hw, r)? {
+        v.push(p);
+    }
+    Ok(v)
+}
+
+fn fmt_gamma(exponent: f64) -> String {
+    format!("{:.3}", 1.0 / exponent)
+        .trim_end_matches('0')
+        .trim_end_matches('.')
+        .into()
+}
+
+/// The table of the gamma stage's LUT ROM (its first memory image), if the plan has one.
+fn lut_table(r: &Render) -> Option<Vec<u64>> {
+    let step = r.steps.iter().find(|s| s.id == StageId::Gamma)?;
+    let img = step.outcome.images.first()?;
+    Some((0..img.words).map(|w| (img.get)(w, 0)).collect())
+}
+
+/// Sigma against screen z: the lens's exact curve over the depths of the frame and, for a
+/// layered plan, each layer's sigma over its depth range.
+fn sigma_plot(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Option<Picture>> {
+    if !r
+        .plan
+        .decisions
+        .iter()
+        .any(|d| d.stage == StageId::Dof && d.need.planned)
+    {
+        return Ok(None);
+    }
+    let Some(acc) = r.taps(StageId::Accumulate) else {
+        return Ok(None);
+    };
+    let frame = &acc.fixed.frame().frame;
+    let Some(lens) = LensMap::of(scene, hw, frame.height) else {
+        return Ok(None);
+    };
+    let keys = frame.depth.iter().copied().filter(|&k| k != u32::MAX);
+    let (lo, hi) = keys.fold((u32::MAX, 0), |(a, b), k| (a.min(k), b.max(k)));
+    let (z0, z1) = if lo <= hi {
+        (lens.z_of(lo), lens.z_of(hi))
+    } else {
+        (0.0, 1.0)
+    };
+    let pad = (z1 - z0).max(1e-3) * 0.05;
+    let (z0, z1) = ((z0 - pad).max(0.0), (z1 + pad).min(1.0));
+    let mut series = vec![Series {
+        name: "exact sigma of the thin lens".into(),
+        colour: RGBColor(31, 119, 180),
+        mark: Mark::Line,
+        points: (0..=400)
+            .map(|i| {
+                let z = z0 + (z1 - z0) * i as f64 / 400.0;
+                (z, lens.sigma_z(z))
+            })
+            .collect(),
+    }];
+    if let Some(layers) = dof_layers(r) {
+        let fore: Vec<&LayerNote> = layers.iter().filter(|l| l.key_far != u32::MAX).collect();
+        series.push(Series {
+            name: "layers: sigma over their depth range".into(),
+            colour: RGBColor(214, 39, 40),
+            mark: Mark::Segments,
+            points: fore
+                .iter()
+                .flat_map(|l| [(l.z_range.0, l.sigma), (l.z_range.1, l.sigma)])
+                .collect(),
+        });
+        series.push(Series {
+            name: "layer middles".into(),
+            colour: RGBColor(214, 39, 40),
+            mark: Mark::Dots(4),
+            points: fore.iter().map(|l| (l.z_mid, l.sigma)).collect(),
+        });
+    }
+    let f = Frame {
+        title: "depth of field: sigma against depth".into(),
+        x: "screen z".into(),
+        y: "sigma, pixels (negative in front of the focus)".into(),
+        size: SIZE,
+    };
+    let svg = plots::curves(&f, &series).map_err(|e| plot_error("sigma", e))?;
+    Ok(Some(svg_picture(
+        &f.title,
+        format!(
+            "over the depths of the frame (dof.sigma = {:?}); the background's sigma is that of infinity",
+            format!("{:?}", hw.dof.sigma).to_lowercase()
+        ),
+        svg,
+        SIZE,
+    )))
+}

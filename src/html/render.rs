@@ -1,0 +1,382 @@
+//! What the HTML report of one render shows, gathered from the [`Render`]: the pictures,
+//! the plan, the per-stage table with each stage's signals, the cycle summary and the plots.
+
+use super::figures;
+use super::images::{self, LayerKey, Picture};
+use crate::analysis::ranges::narrowest;
+use crate::config::HwConfig;
+use crate::perceptual::banding_image;
+use crate::pipeline::Render;
+use crate::scene::Scene;
+use crate::stage::StageId;
+use serde::{Deserialize, Serialize};
+
+/// The report page's data (the template's context).
+#[derive(Serialize)]
+pub struct RenderPage {
+    /// Page title.
+    pub title: String,
+    /// igemu version.
+    pub version: String,
+    /// One-line facts under the title.
+    pub facts: Vec<(String, String)>,
+    /// Images side by side.
+    pub pictures: Vec<Picture>,
+    /// Plan: stages in run order.
+    pub plan_line: String,
+    /// Every stage in or out, with why.
+    pub decisions: Vec<DecisionRow>,
+    /// Plan notes.
+    pub plan_notes: Vec<String>,
+    /// Stage table.
+    pub stages: Vec<StageRow>,
+    /// Totals row: fixed ms, float ms, overflows.
+    pub totals: (String, String, u64),
+    /// Cycle summary lines.
+    pub cycles: Vec<(String, String)>,
+    /// Cycle table rows.
+    pub cycle_rows: Vec<Vec<String>>,
+    /// Plots.
+    pub plots: Vec<Picture>,
+}
+
+/// One stage of the plan.
+#[derive(Serialize)]
+pub struct DecisionRow {
+    /// Stage.
+    pub stage: String,
+    /// In the plan.
+    pub planned: bool,
+    /// Why.
+    pub reason: String,
+}
+
+/// One row of the stage table and its signals.
+#[derive(Serialize)]
+pub struct StageRow {
+    /// Stage name (also the anchor of its signals).
+    pub name: String,
+    /// Fixed model, ms.
+    pub fixed_ms: String,
+    /// Float reference, ms.
+    pub float_ms: String,
+    /// Stage-local max |error| and mean error, output LSBs (`-`: none compared).
+    pub max_err: String,
+    /// Mean error.
+    pub mean_err: String,
+    /// Overflows over its signals.
+    pub overflows: u64,
+    /// Work items.
+    pub work: String,
+    /// RAM and ROM bits, adders, multipliers.
+    pub cost: String,
+    /// Its signals.
+    pub signals: Vec<SignalRow>,
+}
+
+/// One instrumented signal and its range.
+#[derive(Serialize)]
+pub struct SignalRow {
+    /// Name.
+    pub name: String,
+    /// Configured format and its code range.
+    pub format: String,
+    /// Code range of the format.
+    pub range: String,
+    /// Values recorded.
+    pub count: u64,
+    /// Smallest and largest value seen (LSBs).
+    pub seen: String,
+    /// Narrowest format holding what was seen.
+    pub narrowest: String,
+    /// Overflows.
+    pub overflows: u64,
+    /// Mean and RMS quantisation error, LSBs.
+    pub error: String,
+}
+
+/// A depth-of-field layer as the stage's notes list it.
+#[derive(Deserialize)]
+pub(super) struct LayerNote {
+    pub key_far: u32,
+    pub key_near: u32,
+    pub z_range: (f64, f64),
+    pub z_mid: f64,
+    pub sigma: f64,
+    pub pixels: u64,
+}
+
+fn ms(v: f64) -> String {
+    format!("{v:.2}")
+}
+
+/// Gathers the page of render `r` of `scene` on `hw`.
+pub fn page(scene: &Scene, hw: &HwConfig, r: &Render) -> figures::Result<RenderPage> {
+    let rep = &r.report;
+    let (w, h) = (rep.scene.width, rep.scene.height);
+    let e = &rep.end_to_end;
+    let facts = vec![
+        ("scene".into(), format!("{} {w}x{h}", rep.scene.name)),
+        ("hardware".into(), rep.hardware.name.clone()),
+        (
+            "identical DAC codes".into(),
+            format!("{:.4}%", 100.0 * e.codes.identical_fraction),
+        ),
+        ("max |diff|".into(), e.codes.max_abs_diff.to_string()),
+        ("mean diff".into(), format!("{:+.5}", e.codes.mean_diff)),
+        (
+            "visible (Weber > delta)".into(),
+            format!("{:.4}% of pixels", 100.0 * e.weber.over_delta_fraction),
+        ),
+        (
+            "visible contours".into(),
+            format!(
+                "{} steps (float reference {})",
+                rep.contours.contour_steps, rep.contours.contour_steps_reference
+            ),
+        ),
+        ("overflows".into(), rep.overflows.to_string()),
+        (
+            "frame".into(),
+            format!(
+                "{} cycles, {:.1} fps at {} MHz",
+                rep.cycles.total_cycles, rep.cycles.throughput.fps, rep.cycles.throughput.clock_mhz
+            ),
+        ),
+    ];
+    let plan = &rep.plan;
+    Ok(RenderPage {
+        title: format!("igemu render: {} on {}", rep.scene.name, rep.hardware.name),
+        version: rep.igemu_version.clone(),
+        facts,
+        pictures: pictures(r, w, h),
+        plan_line: format!(
+            "{} | region x {}..{} y {}..{} ({:.1}% of the screen) | tiles {}x{} px: {} of {} binned | {}x{} samples/pixel",
+            plan.stages.join(" -> "),
+            plan.region.x0,
+            plan.region.x1,
+            plan.region.y0,
+            plan.region.y1,
+            100.0 * plan.region_fraction,
+            plan.tiles.size,
+            plan.tiles.size,
+            plan.tiles.binned,
+            plan.tiles.cols * plan.tiles.rows,
+            plan.samples,
+            plan.samples,
+        ),
+        decisions: plan
+            .decisions
+            .iter()
+            .map(|d| DecisionRow {
+                stage: d.stage.name().into(),
+                planned: d.need.planned,
+                reason: d.need.reason.clone(),
+            })
+            .collect(),
+        plan_notes: plan.notes.clone(),
+        stages: rep.stages.iter().map(stage_row).collect(),
+        totals: (
+            ms(rep.timing.fixed_ms),
+            ms(rep.timing.float_ms),
+            rep.overflows,
+        ),
+        cycles: cycle_facts(r),
+        cycle_rows: rep
+            .cycles
+            .stages
+            .iter()
+            .map(|s| {
+                [
+                    s.name.clone(),
+                    s.item.clone(),
+                    s.lanes.to_string(),
+                    s.tokens.to_string(),
+                    s.items.to_string(),
+                    s.busy.to_string(),
+                    s.stalled.to_string(),
+                    s.starved.to_string(),
+                    s.fifo_max.to_string(),
+                ]
+                .into()
+            })
+            .collect(),
+        plots: figures::plots(scene, hw, r)?,
+    })
+}
+
+fn pictures(r: &Render, w: u32, h: u32) -> Vec<Picture> {
+    let bits = r.dac_bits;
+    let grey = |title: &str, caption: String, codes: &[u16]| Picture {
+        title: title.into(),
+        caption,
+        uri: images::png_uri(&images::grey(codes, bits), w, h, false),
+        width: w,
+        height: h,
+        legend: Vec::new(),
+    };
+    let levels = format!("{bits}-bit DAC codes as grey levels");
+    let mut v = vec![
+        grey("fixed pipeline", levels.clone(), &r.dac),
+        grey("float reference", levels.clone(), &r.dac_ref),
+    ];
+    let (rgb, max) = images::diff_map(&r.dac, &r.dac_ref);
+    v.push(Picture {
+        title: "difference".into(),
+        caption: format!(
+            "fixed minus reference, DAC codes (largest |diff| {max}): red where the fixed pipeline is brighter"
+        ),
+        uri: images::png_uri(&rgb, w, h, true),
+        width: w,
+        height: h,
+        legend: images::diff_legend(max),
+    });
+    let band = banding_image(&r.dac, &r.contour_map, (1u32 << bits) - 1);
+    v.push(Picture {
+        title: "banding map".into(),
+        caption: "the output dimmed, smooth regions lifted, visible contour steps white".into(),
+        uri: images::png_uri(&band, w, h, false),
+        width: w,
+        height: h,
+        legend: Vec::new(),
+    });
+    if let Some(t) = &r.truth_dac {
+        v.push(grey("depth-of-field truth", levels, t));
+        let (rgb, max) = images::diff_map(&r.dac, t);
+        v.push(Picture {
+            title: "difference to the truth".into(),
+            caption: format!("fixed minus truth, DAC codes (largest |diff| {max})"),
+            uri: images::png_uri(&rgb, w, h, true),
+            width: w,
+            height: h,
+            legend: images::diff_legend(max),
+        });
+    }
+    if let (Some(layers), Some(acc)) = (dof_layers(r), r.taps(StageId::Accumulate)) {
+        let keys: Vec<LayerKey> = layers
+            .iter()
+            .map(|l| LayerKey {
+                keys: (l.key_near, l.key_far),
+                label: if l.key_far == u32::MAX {
+                    format!("background: sigma {:.2} px, {} px", l.sigma, l.pixels)
+                } else {
+                    format!(
+                        "z {:.4}..{:.4}: sigma {:+.2} px, {} px",
+                        l.z_range.0, l.z_range.1, l.sigma, l.pixels
+                    )
+                },
+            })
+            .collect();
+        let (rgb, legend) = images::layer_map(&acc.fixed.frame().frame.depth, &keys);
+        v.push(Picture {
+            title: "depth-of-field layers".into(),
+            caption: "each pixel in the colour of the layer its nearest depth falls in".into(),
+            uri: images::png_uri(&rgb, w, h, true),
+            width: w,
+            height: h,
+            legend,
+        });
+    }
+    v
+}
+
+/// The layers of a layered depth-of-field plan (from the stage's notes).
+pub(super) fn dof_layers(r: &Render) -> Option<Vec<LayerNote>> {
+    let dof = r.report.stages.iter().find(|s| s.name == "dof")?;
+    serde_json::from_value(dof.notes.get("layers")?.clone()).ok()
+}
+
+fn stage_row(s: &crate::stage::StageReport) -> StageRow {
+    let (max_err, mean_err) = match &s.local {
+        Some(l) if l.values > 0 => (
+            format!("{:.3}", l.max_abs_lsb),
+            format!("{:+.4}", l.mean_lsb),
+        ),
+        _ => ("-".into(), "-".into()),
+    };
+    let c = &s.cost;
+    StageRow {
+        name: s.name.clone(),
+        fixed_ms: ms(s.fixed_ms),
+        float_ms: ms(s.float_ms),
+        max_err,
+        mean_err,
+        overflows: s.signals.iter().map(|g| g.overflows).sum(),
+        work: s
+            .work
+            .iter()
+            .filter(|&(_, &v)| v > 0)
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        cost: format!(
+            "RAM {} b, ROM {} b, {} adders, {} multipliers",
+            c.storage_bits,
+            c.lut_bits,
+            c.adders.iter().map(|u| u.count as u64).sum::<u64>(),
+            c.multipliers.iter().map(|u| u.count as u64).sum::<u64>()
+        ),
+        signals: s
+            .signals
+            .iter()
+            .map(|g| {
+                let f = g.format;
+                SignalRow {
+                    name: g.name.clone(),
+                    format: f.to_string(),
+                    range: format!("{}..{}", f.min_code(), f.max_code()),
+                    count: g.count,
+                    seen: match (g.min, g.max) {
+                        (Some(a), Some(b)) => format!("{a}..{b}"),
+                        _ => "-".into(),
+                    },
+                    narrowest: match (g.min, g.max) {
+                        (Some(a), Some(b)) => narrowest(a, b, f.frac_bits).to_string(),
+                        _ => "-".into(),
+                    },
+                    overflows: g.overflows,
+                    error: if g.count > 0 {
+                        format!("{:+.4} / {:.4}", g.mean_error(), g.rms_error())
+                    } else {
+                        "-".into()
+                    },
+                }
+            })
+            .collect(),
+    }
+}
+
+fn cycle_facts(r: &Render) -> Vec<(String, String)> {
+    let c = &r.report.cycles;
+    let t = &c.throughput;
+    vec![
+        (
+            "frame".into(),
+            format!(
+                "{} cycles | bottleneck {} | bounds {} <= {} <= {} {}",
+                c.total_cycles,
+                c.bottleneck,
+                c.lower_bound,
+                c.total_cycles,
+                c.upper_bound,
+                if c.bounds_hold { "hold" } else { "VIOLATED" }
+            ),
+        ),
+        (
+            format!("at {} MHz", t.clock_mhz),
+            format!(
+                "{:.3} ms/frame, {:.1} fps, {:.2} Mpixel/s; {} Hz needs {:.2} Mpixel/s: {}",
+                t.frame_ms,
+                t.fps,
+                t.pixel_rate / 1e6,
+                t.refresh_hz,
+                t.required_pixel_rate / 1e6,
+                if t.real_time {
+                    "real time"
+                } else {
+                    "NOT real time"
+                }
+            ),
+        ),
+    ]
+}

@@ -1,0 +1,300 @@
+//! The HTML reports in a real browser: headless Chromium opens the files that
+//! `igemu render --html` and `igemu sweep --html` write and checks that every image decodes
+//! (complete, natural width and height > 0), that no request leaves the file (every request
+//! is the file itself or a `data:` URI), that no console error, log error or uncaught
+//! exception occurs, and that the sweep table sorts; it saves a screenshot of each page as
+//! a test artefact (`target/tmp/browser/*.png`).
+//!
+//! Chromium is found at `IGEMU_CHROMIUM`, else `/usr/bin/chromium` or on `PATH`. Without
+//! it the test prints a loud SKIP line and passes, unless `IGEMU_REQUIRE_BROWSER=1` (set by
+//! `.ci/run`, which installs Debian's `chromium`): then it fails.
+
+use headless_chrome::protocol::cdp::types::Event;
+use headless_chrome::protocol::cdp::{Network, Page, Runtime};
+use headless_chrome::{Browser, LaunchOptions, Tab};
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+const REQUIRE: &str = "IGEMU_REQUIRE_BROWSER";
+
+fn chromium() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("IGEMU_CHROMIUM") {
+        return Some(PathBuf::from(p));
+    }
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let dirs = std::iter::once(PathBuf::from("/usr/bin")).chain(std::env::split_paths(&path));
+    for d in dirs {
+        for name in ["chromium", "chromium-browser", "google-chrome"] {
+            let p = d.join(name);
+            if p.is_file() {
+                return Some(p);
+            }
+        }
+    }
+    None
+}
+
+fn igemu(args: &[&str], dir: &Path) {
+    let out = Command::new(env!("CARGO_BIN_EXE_igemu"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("igemu runs");
+    assert!(
+        out.status.success(),
+        "igemu {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// What the browser saw of one page.
+#[derive(Default)]
+struct Seen {
+    requests: Vec<String>,
+    problems: Vec<String>,
+}
+
+fn listen(tab: &Tab) -> Arc<Mutex<Seen>> {
+    let seen = Arc::new(Mutex::new(Seen::default()));
+    let s = seen.clone();
+    tab.add_event_listener(Arc::new(move |e: &Event| {
+        let mut s = s.lock().unwrap_or_else(|e| e.into_inner());
+        match e {
+            Event::NetworkRequestWillBeSent(r) => s.requests.push(r.params.request.url.clone()),
+            Event::RuntimeConsoleAPICalled(c) => {
+                use Runtime::ConsoleAPICalledEventTypeOption as T;
+                if matches!(c.params.Type, T::Error | T::Assert | T::Warning) {
+                    let args: Vec<String> = c
+                        .params
+                        .args
+                        .iter()
+                        .map(|a| format!("{:?}", a.value))
+                        .collect();
+                    s.problems
+                        .push(format!("console {:?}: {}", c.params.Type, args.join(" ")));
+                }
+            }
+            Event::RuntimeExceptionThrown(x) => s
+                .problems
+                .push(format!("exception: {}", x.params.exception_details.text)),
+            Event::LogEntryAdded(l) => {
+                use headless_chrome::protocol::cdp::Log::LogEntryLevel;
+                if matches!(
+                    l.params.entry.level,
+                    LogEntryLevel::Error | LogEntryLevel::Warning
+                ) {
+                    s.problems.push(format!(
+                        "log {:?} ({:?}): {} {}",
+                        l.params.entry.level,
+                        l.params.entry.source,
+                        l.params.entry.text,
+                        l.params.entry.url.clone().unwrap_or_default()
+                    ));
+                }
+            }
+            _ => {}
+        }
+    }))
+    .expect("listener");
+    seen
+}
+
+fn eval(tab: &Tab, js: &str) -> serde_json::Value {
+    tab.evaluate(js, false)
+        .unwrap_or_else(|e| panic!("evaluate {js}: {e}"))
+        .value
+        .unwrap_or(serde_json::Value::Null)
+}
+
+/// Opens `file` and checks it (module doc); returns the tab for page-specific checks.
+fn open_and_check(browser: &Browser, file: &Path, images: usize, shot: &Path) -> Arc<Tab> {
+    let tab = browser.new_tab().expect("tab");
+    tab.set_default_timeout(Duration::from_secs(60));
+    let seen = listen(&tab);
+    tab.call_method(Network::Enable {
+        max_total_buffer_size: None,
+        max_resource_buffer_size: None,
+        max_post_data_size: None,
+        report_direct_socket_traffic: None,
+        enable_durable_messages: None,
+    })
+    .expect("network events");
+    tab.enable_log().expect("log events");
+    tab.enable_runtime().expect("runtime events");
+    let url = format!("file://{}", file.display());
+    tab.navigate_to(&url)
+        .and_then(|t| t.wait_until_navigated())
+        .unwrap_or_else(|e| panic!("{url}: {e}"));
+    // Let every image finish decoding.
+    eval(
+        &tab,
+        "Promise.all(Array.from(document.images).map(i => i.decode().catch(() => null))).then(() => 1)",
+    );
+    let (requests, problems) = {
+        let s = seen.lock().unwrap_or_else(|e| e.into_inner());
+        (s.requests.clone(), s.problems.clone())
+    };
+    for r in &requests {
+        assert!(
+            r == &url || r.starts_with("data:"),
+            "{}: a request left the file: {r}",
+            file.display()
+        );
+    }
+    assert!(problems.is_empty(), "{}: {problems:#?}", file.display());
+    let v = eval(
+        &tab,
+        "JSON.stringify(Array.from(document.images).map(i => [i.alt, i.complete, i.naturalWidth, i.naturalHeight, i.src.slice(0, 22)]))",
+    );
+    let imgs: Vec<(String, bool, u64, u64, String)> =
+        serde_json::from_str(v.as_str().expect("a JSON string")).expect("image list");
+    assert!(
+        imgs.len() == images,
+        "{}: {} images, expected {images}",
+        file.display(),
+        imgs.len()
+    );
+    for (alt, complete, w, h, src) in &imgs {
+        assert!(
+            *complete && *w > 0 && *h > 0,
+            "{}: image `{alt}` did not decode (complete {complete}, natural {w}x{h})",
+            file.display()
+        );
+        assert!(
+            src.starts_with("data:image/"),
+            "image `{alt}` is not inline: {src}"
+        );
+    }
+    let png = tab
+        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
+        .expect("screenshot");
+    std::fs::write(shot, png).expect("screenshot written");
+    eprintln!(
+        "browser: {}: {} images decoded; screenshot {}",
+        file.display(),
+        imgs.len(),
+        shot.display()
+    );
+    tab
+}
+
+#[test]
+fn html_reports_open_in_a_browser_without_errors() {
+    let Some(chrome) = chromium() else {
+        let line = "SKIP tests/browser.rs: Chromium not installed (apt-get install chromium, or set IGEMU_CHROMIUM): the HTML reports were NOT opened in a browser";
+        if std::env::var(REQUIRE).is_ok_and(|v| v == "1") {
+            panic!("{line}; {REQUIRE}=1 requires it");
+        }
+        eprintln!("\n*** {line} ***\n");
+        return;
+    };
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("browser");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let truth = ["--dof-truth", "--lens-samples", "8"];
+    igemu(
+        &[&["render", "-o", "r.png", "--html", "r.html"][..], &truth].concat(),
+        &dir,
+    );
+    igemu(
+        &[
+            "render",
+            "default-pinhole",
+            "--hw",
+            "log8-logadd",
+            "-o",
+            "l.png",
+            "--html",
+            "l.html",
+        ],
+        &dir,
+    );
+    let grid = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/grid.toml");
+    igemu(
+        &[
+            "sweep",
+            "--grid",
+            grid.to_str().unwrap(),
+            "--out",
+            "s.jsonl",
+            "--html",
+            "s.html",
+        ],
+        &dir,
+    );
+    let profile = dir.join("profile");
+    // Background services off: the machine may have no network, and none is needed.
+    let args: Vec<&OsStr> = [
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+    ]
+    .iter()
+    .map(OsStr::new)
+    .collect();
+    let browser = Browser::new(
+        LaunchOptions::default_builder()
+            .path(Some(chrome))
+            .headless(true)
+            .sandbox(false)
+            .window_size(Some((1400, 2400)))
+            .user_data_dir(Some(profile))
+            .args(args)
+            .idle_browser_timeout(Duration::from_secs(120))
+            .build()
+            .expect("launch options"),
+    )
+    .expect("Chromium starts");
+
+    // The render: 4 pictures (fixed, reference, difference, banding), the truth and the
+    // difference to it, the layer map of the thin-lens default scene, and 4 plots (LUT,
+    // histogram, timeline, sigma).
+    let tab = open_and_check(&browser, &dir.join("r.html"), 11, &dir.join("render.png"));
+    let links = eval(
+        &tab,
+        "JSON.stringify(Array.from(document.querySelectorAll('a[href^=\"#signals-\"]')).map(a => !!document.getElementById(a.getAttribute('href').slice(1))))",
+    );
+    let links: Vec<bool> = serde_json::from_str(links.as_str().unwrap()).unwrap();
+    assert!(
+        links.len() >= 6 && links.iter().all(|&b| b),
+        "stage links: {links:?}"
+    );
+
+    // A log-coded pinhole render: no depth of field (no layer map, no sigma plot).
+    open_and_check(
+        &browser,
+        &dir.join("l.html"),
+        7,
+        &dir.join("render-log.png"),
+    );
+
+    // The sweep: the Pareto plot; the table sorts numerically on a click.
+    let tab = open_and_check(&browser, &dir.join("s.html"), 1, &dir.join("sweep.png"));
+    let col = "Array.from(document.querySelectorAll('#rows-table thead th')).findIndex(t => t.textContent === 'mean Weber')";
+    let sorted = |dir: i32| {
+        let js = format!(
+            "(() => {{ const c = {col}; document.querySelectorAll('#rows-table thead th')[c].click(); \
+             const v = Array.from(document.querySelectorAll('#rows-table tbody tr')).map(r => parseFloat(r.cells[c].getAttribute('data-key'))); \
+             return JSON.stringify(v); }})()"
+        );
+        let v: Vec<f64> = serde_json::from_str(eval(&tab, &js).as_str().unwrap()).unwrap();
+        assert_eq!(v.len(), 48, "every row of examples/grid.toml");
+        assert!(
+            v.windows(2).all(|w| (w[1] - w[0]) * dir as f64 >= 0.0),
+            "sorted {dir}: {v:?}"
+        );
+    };
+    sorted(1);
+    sorted(-1);
+    let front = eval(
+        &tab,
+        "document.querySelectorAll('#rows-table tr.front').length",
+    );
+    assert!(front.as_u64().unwrap_or(0) >= 1, "the front is highlighted");
+}
