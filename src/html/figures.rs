@@ -12,7 +12,8 @@ use crate::pipeline::report::gamma_spec;
 use crate::scene::Scene;
 use crate::stage::StageId;
 use crate::stage::dof::LensMap;
-use crate::stage::logdomain::log_code;
+use crate::stage::logdomain::{ZERO, log_code};
+use crate::stage::taps::FrameCoding;
 use plotters::style::RGBColor;
 
 /// Drawing fails only on a plotters error; the caller names the report file.
@@ -70,25 +71,17 @@ pub fn plots(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
             points: xs.map(|l| (l, code.linear_of_log(l))).collect(),
         });
     }
-    if let Some(table) = lut_table(r) {
-        let (last, max) = (
-            (table.len() - 1).max(1) as f64,
-            *table.iter().max().unwrap_or(&1) as f64,
-        );
-        let step = (table.len() / 512).max(1);
+    if let Some((entries, points)) = lut_points(r) {
         series.push(Series {
-            name: format!("this render's LUT ({} entries), DAC / max", table.len()),
+            name: format!("this render's LUT ({entries} entries), DAC / max"),
             colour: RGBColor(0, 0, 0),
             mark: Mark::Dots(2),
-            points: (0..table.len())
-                .step_by(step)
-                .map(|a| (a as f64 / last, table[a] as f64 / max.max(1.0)))
-                .collect(),
+            points,
         });
     }
     let f = Frame {
         title: "gamma LUT transfer".into(),
-        x: "input code / full white".into(),
+        x: "input: linear code / full white, or log intensity L".into(),
         y: "output / full scale".into(),
         size: SIZE,
     };
@@ -157,11 +150,30 @@ fn fmt_gamma(exponent: f64) -> String {
         .into()
 }
 
-/// The table of the gamma stage's LUT ROM (its first memory image), if the plan has one.
-fn lut_table(r: &Render) -> Option<Vec<u64>> {
-    let step = r.steps.iter().find(|s| s.id == StageId::Gamma)?;
-    let img = step.outcome.images.first()?;
-    Some((0..img.words).map(|w| (img.get)(w, 0)).collect())
+/// The gamma stage's LUT ROM (its first memory image), if the plan has one: its size and
+/// about 512 of its entries as (input, output / largest output). The input is the address
+/// over full white for a linear frame, the log intensity `L` of the address for a log frame
+/// (addresses below `L = 0` and the zero code left out).
+fn lut_points(r: &Render) -> Option<(usize, Vec<(f64, f64)>)> {
+    let i = r.steps.iter().position(|s| s.id == StageId::Gamma)?;
+    let img = r.steps[i].outcome.images.first()?;
+    let table: Vec<u64> = (0..img.words).map(|w| (img.get)(w, 0)).collect();
+    let coding = &r.steps[i.checked_sub(1)?].outcome.taps.fixed.frame().coding;
+    let last = (table.len() - 1).max(1) as f64;
+    let max = table.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let x = |a: usize| match coding {
+        FrameCoding::Linear => Some(a as f64 / last),
+        FrameCoding::Log(add) => {
+            let l = (a as i64 - add.off) as f64 / add.unit();
+            (a as i64 != ZERO && l >= 0.0).then_some(l)
+        }
+    };
+    let step = (table.len() / 512).max(1);
+    let points = (0..table.len())
+        .step_by(step)
+        .filter_map(|a| Some((x(a)?, table[a] as f64 / max)))
+        .collect();
+    Some((table.len(), points))
 }
 
 /// Sigma against screen z: the lens's exact curve over the depths of the frame and, for a
@@ -236,4 +248,41 @@ fn sigma_plot(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Option<Picture
         svg,
         SIZE,
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stage::RunOptions;
+
+    /// The LUT read back from the ROM lies on the curve of its coding: `I^(1/gamma)` of a
+    /// linear code, eq. 15 of the log intensity for a log frame, within half a DAC code.
+    #[test]
+    fn the_lut_points_lie_on_their_coding_curve() {
+        let scene = Scene::embedded("default-pinhole").unwrap();
+        for (preset, log) in [("linear12", false), ("log8-logadd", true)] {
+            let hw = HwConfig::preset(preset).unwrap();
+            let r = crate::pipeline::render(&scene, &hw, RunOptions::FAST).unwrap();
+            let spec = gamma_spec(&scene, &hw);
+            let code = log_code(&scene, &hw).unwrap();
+            let (entries, points) = lut_points(&r).unwrap();
+            assert!(
+                points.len() >= 128 && entries >= points.len(),
+                "{preset}: {} points of {entries}",
+                points.len()
+            );
+            let max = spec.dac.format.max_code() as f64;
+            for &(x, y) in &points {
+                let ideal = if log {
+                    spec.power(code.linear_of_log(x))
+                } else {
+                    spec.power(x)
+                };
+                assert!(
+                    (y - ideal).abs() <= 0.5 / max + 1e-12,
+                    "{preset}: LUT at {x} is {y}, the curve {ideal}"
+                );
+            }
+        }
+    }
 }
