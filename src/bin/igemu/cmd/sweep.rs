@@ -3,7 +3,6 @@
 
 use crate::args::{TruthArgs, arg_error, load_scene};
 use crate::guard::Inputs;
-use crate::out::{out, outln};
 use clap::Args;
 use igemu::error::Error;
 use igemu::pipeline;
@@ -24,8 +23,8 @@ pub struct SweepArgs {
     /// Keep the complete rows already in OUT and run only the missing configurations.
     #[arg(long)]
     pub resume: bool,
-    /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run).
-    #[arg(long, value_name = "K/N")]
+    /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run); `auto` takes it from a Slurm array task (SLURM_ARRAY_TASK_ID, _MIN, _COUNT, _STEP), `auto/N` also from a Kubernetes indexed Job (JOB_COMPLETION_INDEX of N).
+    #[arg(long, value_name = "K/N|auto|auto/N")]
     pub shard: Option<String>,
     /// Configurations rendered in parallel (1 = serial; results are identical).
     #[arg(long, default_value_t = 1)]
@@ -64,7 +63,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         inputs.check("--plot", p)?;
     }
     let shard = match &a.shard {
-        Some(s) => Some(grid::Shard::parse(s).map_err(|m| arg_error("--shard", m))?),
+        Some(s) => Some(shard_arg(s)?),
         None => None,
     };
     if a.jobs == 0 || a.jobs > 1024 {
@@ -91,12 +90,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
             "the flicker axis needs the flicker metrics: add --flicker PHASES".into(),
         ));
     }
-    if !a.truth.dof_truth && axes.iter().any(|x| x.needs_truth()) {
-        return Err(arg_error(
-            "--axes",
-            "the truth_* axes need the depth-of-field truth: add --dof-truth".into(),
-        ));
-    }
+    check_truth_axes(&axes, a.truth.dof_truth)?;
     let file = igemu::files::TomlFile::read(&a.grid)?;
     let configs = grid::Grid::parse(&file)?.expand(&file)?;
     let scenes: Vec<Scene> = if a.scenes.is_empty() {
@@ -168,29 +162,33 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     if let Some(p) = &a.plot {
         sweep::plot::write(rows, &axes, p)?;
     }
-    let front = pareto::front(rows, &axes);
-    outln!(
-        "Pareto front on {} ({} of {} rows):",
-        axes.iter()
-            .map(|x| x.name())
-            .collect::<Vec<_>>()
-            .join(" x "),
-        front.len(),
-        rows.len()
-    );
-    out!("  {:>5}  {:<16}", "index", "scene");
-    for x in &axes {
-        out!("  {:>18}", x.name());
-    }
-    outln!("  configuration");
-    for &i in &front {
-        let r = &rows[i];
-        out!("  {:>5}  {:<16}", r.index, r.scene);
-        for x in &axes {
-            out!("  {:>18.4}", x.value(r));
-        }
-        let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
-        outln!("  {}", cfg.join(" "));
-    }
+    crate::print::print_front(rows, &axes)?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The shard of `--shard`: `K/N`, or `auto`/`auto/N` from the environment of a Slurm array
+/// task or a Kubernetes indexed Job (then said on stderr).
+fn shard_arg(s: &str) -> Result<igemu::sweep::grid::Shard, Error> {
+    let (shard, from) = igemu::sweep::grid::Shard::from_arg(s, |v| std::env::var(v).ok())
+        .map_err(|m| arg_error("--shard", m))?;
+    if let Some(from) = from {
+        let _ = writeln!(
+            std::io::stderr(),
+            "igemu sweep: --shard {s}: shard {}/{} from {from}",
+            shard.k,
+            shard.n
+        );
+    }
+    Ok(shard)
+}
+
+/// Refuses a `truth_*` axis without `--dof-truth`.
+pub fn check_truth_axes(axes: &[igemu::sweep::pareto::Axis], dof_truth: bool) -> Result<(), Error> {
+    if !dof_truth && axes.iter().any(|x| x.needs_truth()) {
+        return Err(arg_error(
+            "--axes",
+            "the truth_* axes need the depth-of-field truth: add --dof-truth".into(),
+        ));
+    }
+    Ok(())
 }
