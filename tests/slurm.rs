@@ -148,7 +148,7 @@ fn a_four_task_array_sweep_merges_to_the_single_machine_run() {
         ("PARTS", parts_s.as_str()),
     ];
     let name = format!("igemu-test-{}", std::process::id());
-    let t = Instant::now();
+    let (t, submitted) = (Instant::now(), std::time::SystemTime::now());
     let o = sbatch(&d, &name, &[], &env);
     let wall = t.elapsed().as_secs_f64();
     assert!(
@@ -202,8 +202,16 @@ fn a_four_task_array_sweep_merges_to_the_single_machine_run() {
     let rows = common::rows_without_timing(&merged);
     assert_eq!(rows.len(), 8);
     assert_eq!(rows, common::rows_without_timing(&single));
+    // When the array really ended: sbatch --wait sees it at its next poll of the job state.
+    let last = part_files
+        .iter()
+        .filter_map(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
+        .max()
+        .and_then(|m| m.duration_since(submitted).ok())
+        .map_or(f64::NAN, |d| d.as_secs_f64());
     eprintln!(
-        "slurm: 4-task array sweep of 8 jobs: sbatch --wait {wall:.2} s, merge {merge_s:.3} s"
+        "slurm: 4-task array sweep of 8 jobs: last part written {last:.2} s after sbatch, \
+         sbatch --wait returned after {wall:.2} s, merge {merge_s:.3} s"
     );
 
     // Task 2 killed after its first row: the merge names the lost row; the task's shard
