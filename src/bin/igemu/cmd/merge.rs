@@ -3,12 +3,11 @@
 //! with the Pareto front; and [`SweepCmd`], the `sweep` command with its `merge`
 //! subcommand.
 
-use crate::args::{TruthArgs, arg_error, load_scene};
+use crate::args::{TruthArgs, arg_error};
 use crate::guard::{Inputs, distinct_outputs};
 use clap::{Args, Subcommand};
 use igemu::error::Error;
-use igemu::scene::Scene;
-use igemu::sweep::{self, grid, merge, pareto};
+use igemu::sweep::{self, merge, pareto};
 use std::io::Write;
 use std::process::ExitCode;
 
@@ -120,16 +119,7 @@ fn run_merge(a: MergeArgs) -> Result<ExitCode, Error> {
     }
     let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
     super::sweep::check_truth_axes(&axes, a.truth.dof_truth)?;
-    let file = igemu::files::TomlFile::read(&a.grid)?;
-    let configs = grid::Grid::parse(&file)?.expand(&file)?;
-    let scenes: Vec<Scene> = if a.scenes.is_empty() {
-        vec![Scene::default_scene()]
-    } else {
-        a.scenes
-            .iter()
-            .map(|s| load_scene(Some(s)))
-            .collect::<Result<_, _>>()?
-    };
+    let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
     let parts: Vec<merge::Part> = a
         .parts
         .iter()

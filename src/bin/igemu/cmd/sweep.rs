@@ -1,12 +1,11 @@
 //! `igemu sweep`: render every configuration of a word-width grid on the scenes, one JSON
 //! line each (resumable, shardable, parallel), and print the Pareto front.
 
-use crate::args::{TruthArgs, arg_error, load_scene};
+use crate::args::{TruthArgs, arg_error};
 use crate::guard::Inputs;
 use clap::Args;
 use igemu::error::Error;
 use igemu::pipeline;
-use igemu::scene::Scene;
 use std::io::Write;
 use std::process::ExitCode;
 
@@ -51,7 +50,7 @@ pub struct SweepArgs {
 
 /// Runs `igemu sweep`; returns the exit code.
 pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
-    use igemu::sweep::{self, grid, pareto};
+    use igemu::sweep::{self, pareto};
     // Everything is checked before the first render.
     let mut inputs = Inputs::default();
     inputs.add("the grid file (--grid)", Some(&a.grid));
@@ -91,16 +90,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         ));
     }
     check_truth_axes(&axes, a.truth.dof_truth)?;
-    let file = igemu::files::TomlFile::read(&a.grid)?;
-    let configs = grid::Grid::parse(&file)?.expand(&file)?;
-    let scenes: Vec<Scene> = if a.scenes.is_empty() {
-        vec![Scene::default_scene()]
-    } else {
-        a.scenes
-            .iter()
-            .map(|s| load_scene(Some(s)))
-            .collect::<Result<_, _>>()?
-    };
+    let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
     for c in &configs {
         for s in &scenes {
             pipeline::guard_band(s, &c.hw).map_err(|e| {
