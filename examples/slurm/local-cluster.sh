@@ -11,7 +11,8 @@
 # written by this script is never replaced), one node with the CPUs and memory `slurmd -C`
 # reports and one partition, SlurmUser=root, proctrack/linuxproc, task/none,
 # select/cons_tres (so the array's tasks share the node's CPUs). Everything else (state,
-# spool, logs, pid files) lives under $IGEMU_SLURM_STATE (default /tmp/igemu-slurm).
+# spool, logs, pid files) lives under $IGEMU_SLURM_STATE (default /tmp/igemu-slurm). The
+# daemons talk over 127.0.0.1 (ports 6817, 6818), whatever the host name resolves to.
 # munged is started as the munge user unless one already answers (then it is left alone);
 # the key /etc/munge/munge.key is created when missing. No systemd is needed: the daemons
 # are started directly and stopped by their pid files.
@@ -41,11 +42,11 @@ alive() { # pid file -> true while its process runs
 }
 
 stop_pid() { # name, pid file: TERM, wait up to 15 s, then KILL
-  local name=$1 pidf=$2 pid i
+  local name=$1 pidf=$2 pid
   alive "$pidf" || { rm -f "$pidf"; return 0; }
   pid=$(cat "$pidf")
   kill "$pid" 2>/dev/null || true
-  for i in $(seq 1 150); do
+  for _ in $(seq 1 150); do
     kill -0 "$pid" 2>/dev/null || break
     sleep 0.1
   done
@@ -83,8 +84,7 @@ start_munge() {
   mkdir -p "$state/munge"
   chown munge:munge "$state/munge"
   runuser -u munge -- munged --pid-file="$state/munge/munged.pid" --log-file="$state/munge/munged.log"
-  local i
-  for i in $(seq 1 50); do
+  for _ in $(seq 1 50); do
     munge_ok && return 0
     sleep 0.1
   done
@@ -109,7 +109,7 @@ write_conf() {
 $marker
 # A single-node cluster for tests; '$0 stop' removes this file.
 ClusterName=igemu
-SlurmctldHost=$host
+SlurmctldHost=$host(127.0.0.1)
 SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
@@ -133,7 +133,7 @@ SlurmdLogFile=$state/slurmd.log
 SlurmctldDebug=info
 SlurmdDebug=info
 MinJobAge=600
-$node State=UNKNOWN
+$node NodeAddr=127.0.0.1 State=UNKNOWN
 PartitionName=debug Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 EOF
   mv "$conf.tmp" "$conf"
@@ -169,8 +169,7 @@ start() {
   # -c: no state from an earlier run; -i: ignore unreadable state.
   slurmctld -c -i || { logs >&2; die "slurmctld did not start (log above)"; }
   slurmd || { logs >&2; die "slurmd did not start (log above)"; }
-  local i
-  for i in $(seq 1 $((wait_s * 2))); do
+  for _ in $(seq 1 $((wait_s * 2))); do
     if scontrol ping 2>/dev/null | grep -q UP && sinfo -h -o %T 2>/dev/null | grep -qx idle; then
       echo "local-cluster: up ($(sinfo -h -o '%P %D node %N %c CPUs %m MB %T'), state $state)"
       return 0
