@@ -19,9 +19,12 @@
 //!   ([`SweepSummary::dropped`]), rewrites the file without them and runs the rest.
 //! * `--shard K/N` runs a contiguous block of jobs: shard files concatenated in K order equal
 //!   the unsharded output. Every K/N with 1 <= K <= N is valid ([`grid::Shard::range`]
-//!   cannot overflow); shards beyond the number of jobs are empty.
+//!   cannot overflow); shards beyond the number of jobs are empty. `--shard auto` takes K/N
+//!   from a Slurm array task or a Kubernetes indexed Job ([`grid::Shard::from_env`]), and
+//!   [`merge`] checks and joins the part files of the tasks (docs/cluster.md).
 
 pub mod grid;
+pub mod merge;
 pub mod pareto;
 pub mod plot;
 pub mod rows;
@@ -450,19 +453,11 @@ pub fn run(
 ) -> Result<SweepSummary> {
     let all = jobs(configs.len(), scenes.len());
     let range = opts.shard.map_or(0..all.len(), |s| s.range(all.len()));
-    let mine = &all[range];
-    let scene_keys: Vec<u64> = scenes.iter().map(scene_key).collect();
-    let hw_keys: Vec<u64> = configs
-        .iter()
-        .map(|c| rows::with_truth(hardware_key(&c.hw), opts.dof_truth))
-        .collect();
-    let ids: Vec<String> = mine
-        .iter()
-        .map(|j| row_id_from_keys(scene_keys[j.scene], hw_keys[j.config]))
-        .collect();
+    let mine = &all[range.clone()];
+    let ids = &rows::job_ids(configs, scenes, opts.dof_truth)[range];
     let (kept, dropped) = if opts.resume {
         let (rows, skipped) = read_rows(opts.out)?;
-        let (kept, unused) = keep_rows(rows, mine, &ids, configs, scenes);
+        let (kept, unused) = keep_rows(rows, mine, ids, configs, scenes);
         // Drop the partial line and every row not kept before appending.
         rewrite_sorted(opts.out, &kept)?;
         (kept, skipped + unused)
@@ -474,7 +469,7 @@ pub fn run(
     let todo: Vec<(Job, &String)> = mine
         .iter()
         .copied()
-        .zip(&ids)
+        .zip(ids)
         .filter(|(j, _)| !done.contains(&j.index))
         .collect();
     let reused = kept.len();
@@ -570,15 +565,20 @@ fn keep_rows(
             .or_else(|| first.get(id.as_str()));
         if let Some(&p) = at {
             used[p] = true;
-            let mut r = file[p].clone();
-            r.index = j.index;
-            r.scene = scenes[j.scene].name.clone();
-            r.config = config_json(&configs[j.config]);
-            kept.push(r);
+            kept.push(relabel(file[p].clone(), j, configs, scenes));
         }
     }
     let unused = used.iter().filter(|&&u| !u).count();
     (kept, unused)
+}
+
+/// `r` as the row of job `j`: its index, scene name and grid fields (a row found by its id
+/// may come from a reordered or respelled grid).
+pub(crate) fn relabel(mut r: Row, j: &Job, configs: &[Config], scenes: &[Scene]) -> Row {
+    r.index = j.index;
+    r.scene = scenes[j.scene].name.clone();
+    r.config = config_json(&configs[j.config]);
+    r
 }
 
 /// A row as JSON without its run state (timing, reused stages), for comparing runs.

@@ -16,6 +16,7 @@
 //!   recomputed.
 
 use super::Row;
+use super::grid::Config;
 use crate::config::HwConfig;
 use crate::error::{Error, Result};
 use crate::fnv::{Fnv, fnv1a};
@@ -85,6 +86,20 @@ pub fn row_id(scene: &Scene, hw: &HwConfig) -> String {
     row_id_from_keys(scene_key(scene), hardware_key(hw))
 }
 
+/// The row id of every job of a sweep of `configs` on `scenes`, in job order ([`super::jobs`]),
+/// with the truth's lens-sample count mixed in when `dof_truth` is given ([`with_truth`]).
+pub fn job_ids(configs: &[Config], scenes: &[Scene], dof_truth: Option<u32>) -> Vec<String> {
+    let scene_keys: Vec<u64> = scenes.iter().map(scene_key).collect();
+    let hw_keys: Vec<u64> = configs
+        .iter()
+        .map(|c| with_truth(hardware_key(&c.hw), dof_truth))
+        .collect();
+    super::jobs(configs.len(), scenes.len())
+        .iter()
+        .map(|j| row_id_from_keys(scene_keys[j.scene], hw_keys[j.config]))
+        .collect()
+}
+
 pub(crate) fn io(path: &str) -> impl Fn(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
         path: path.to_string(),
@@ -101,20 +116,27 @@ pub fn read_rows(path: &str) -> Result<(Vec<Row>, usize)> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0)),
         Err(e) => return Err(io(path)(e)),
     };
+    let (rows, skipped) = parse_rows(&text);
+    Ok((rows.into_iter().map(|(_, r)| r).collect(), skipped.len()))
+}
+
+/// The complete rows of a rows file's text with their 1-based line numbers, and the numbers
+/// of the lines skipped as [`read_rows`] skips them (blank lines are neither).
+pub fn parse_rows(text: &str) -> (Vec<(usize, Row)>, Vec<usize>) {
     let lines: Vec<&str> = text.split('\n').collect();
     let last = lines.len() - 1;
     let mut rows = Vec::new();
-    let mut skipped = 0;
+    let mut skipped = Vec::new();
     for (i, line) in lines.iter().enumerate() {
         if line.trim().is_empty() {
             continue;
         }
         match serde_json::from_str::<Row>(line) {
-            Ok(r) if i < last => rows.push(r),
-            _ => skipped += 1,
+            Ok(r) if i < last => rows.push((i + 1, r)),
+            _ => skipped.push(i + 1),
         }
     }
-    Ok((rows, skipped))
+    (rows, skipped)
 }
 
 /// A temporary path in the folder of `path` (so the rename that replaces `path` stays on

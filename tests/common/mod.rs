@@ -6,13 +6,18 @@ use igemu::config::HwConfig;
 use igemu::files::TomlFile;
 use igemu::scene::Scene;
 
-/// A scene with a pinhole camera and the given `[[object]]` blocks.
-pub fn scene(width: u32, height: u32, background: f64, objects: &str) -> Scene {
-    let text = format!(
+/// The TOML text of a scene with a pinhole camera and the given `[[object]]` blocks.
+pub fn scene_toml(width: u32, height: u32, background: f64, objects: &str) -> String {
+    format!(
         "[image]\nwidth = {width}\nheight = {height}\nbackground = {background}\n\n\
          [camera]\nposition = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nfov_y_deg = 40.0\nnear = 1.0\nfar = 100.0\n\n\
          [display]\ncontrast = 100.0\ngamma = 2.4\nweber = 0.02\nb_max = 100.0\n\n{objects}"
-    );
+    )
+}
+
+/// A scene with a pinhole camera and the given `[[object]]` blocks ([`scene_toml`]).
+pub fn scene(width: u32, height: u32, background: f64, objects: &str) -> Scene {
+    let text = scene_toml(width, height, background, objects);
     Scene::from_toml(&TomlFile::from_text("test.toml", &text))
         .unwrap_or_else(|e| panic!("{e}\n{text}"))
 }
@@ -157,4 +162,44 @@ pub fn affine_lens(z_frac: u32) -> igemu::stage::dof::LensMap {
         z_frac,
         coc_px: 1.0,
     }
+}
+
+/// A small sweep in `dir` for the sweep-merge and Slurm tests: two scene files `a.toml`,
+/// `b.toml` (a shaded triangle, a line and a light point on 96x64, two backgrounds) and a
+/// grid `g.toml` of 4 configurations (`gamma.dac_bits` x `dither.kind`): 8 jobs. Returns
+/// (the scene paths, the grid path).
+pub fn small_sweep(dir: &std::path::Path) -> (Vec<String>, String) {
+    let objects = [
+        tri(
+            [[6.0, 6.0, 0.3], [90.0, 12.0, 0.5], [24.0, 58.0, 0.7]],
+            [0.05, 0.9, 0.4],
+        ),
+        line([3.0, 50.0, 0.2], [93.0, 30.0, 0.2], 0.7, 1.5),
+        point(48.0, 20.0, 0.1, 1.0, 2.0),
+    ]
+    .concat();
+    std::fs::create_dir_all(dir).expect("sweep dir");
+    let scenes = [("a.toml", 0.02), ("b.toml", 0.1)]
+        .iter()
+        .map(|(name, bg)| {
+            let p = dir.join(name);
+            std::fs::write(&p, scene_toml(96, 64, *bg, &objects)).expect("write scene");
+            p.to_string_lossy().into_owned()
+        })
+        .collect();
+    let grid = dir.join("g.toml");
+    std::fs::write(
+        &grid,
+        "gamma.dac_bits = [6, 8]\ndither.kind = [\"none\", \"bayer4\"]\n",
+    )
+    .expect("write grid");
+    (scenes, grid.to_string_lossy().into_owned())
+}
+
+/// The rows of a sweep's rows file as JSON without their run state (`timing`, `reused`),
+/// asserting that no line was skipped.
+pub fn rows_without_timing(path: &str) -> Vec<serde_json::Value> {
+    let (rows, skipped) = igemu::sweep::read_rows(path).expect("read rows");
+    assert_eq!(skipped, 0, "{path} has a partial or bad line");
+    rows.iter().map(igemu::sweep::without_timing).collect()
 }

@@ -124,6 +124,26 @@ pub fn load_scene(arg: Option<&str>) -> Result<Scene, Error> {
     }
 }
 
+/// The configurations of a grid file (parsed and validated) and the scenes of a sweep
+/// (default: the embedded default scene), as `igemu sweep` and `igemu sweep merge` read them.
+pub fn grid_and_scenes(
+    grid: &str,
+    scenes: &[String],
+) -> Result<(Vec<igemu::sweep::grid::Config>, Vec<Scene>), Error> {
+    use igemu::sweep::grid::Grid;
+    let file = igemu::files::TomlFile::read(grid)?;
+    let configs = Grid::parse(&file)?.expand(&file)?;
+    let scenes = if scenes.is_empty() {
+        vec![Scene::default_scene()]
+    } else {
+        scenes
+            .iter()
+            .map(|s| load_scene(Some(s)))
+            .collect::<Result<_, _>>()?
+    };
+    Ok((configs, scenes))
+}
+
 /// An error naming a flag (or a command) and what is wrong with it.
 pub fn arg_error(flag: &str, msg: String) -> Error {
     Error::File(FileError {

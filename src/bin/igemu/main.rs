@@ -47,8 +47,8 @@ enum Cmd {
     Hdl(cmd::hdl::HdlCmd),
     /// Hardware cost per stage: the analytic model, and with --synth yosys cell counts of the HDL models.
     Cost(cmd::cost::CostArgs),
-    /// Word-width sweep: render every configuration of a grid, one JSON line each, and print the Pareto front.
-    Sweep(cmd::sweep::SweepArgs),
+    /// Word-width sweep: render every configuration of a grid, one JSON line each, and print the Pareto front; `sweep merge` joins the part files of a sharded sweep.
+    Sweep(cmd::merge::SweepCmd),
     /// Observed min/max per signal and the narrowest format holding it; export the formats as typedefs.
     Ranges(cmd::ranges::RangesArgs),
 }
@@ -77,7 +77,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
         Cmd::Flicker(a) => cmd::flicker::run(a),
         Cmd::Hdl(c) => cmd::hdl::run(c),
         Cmd::Cost(a) => cmd::cost::run(a),
-        Cmd::Sweep(a) => cmd::sweep::run(a),
+        Cmd::Sweep(a) => cmd::merge::run(a),
         Cmd::Ranges(a) => cmd::ranges::run(a),
     }
 }

@@ -1,5 +1,5 @@
 //! The text reports of the commands: the render report, the cycle report, the width
-//! validation table, and the work-count list they share.
+//! validation table, the Pareto front of a sweep, and the work-count list they share.
 
 use crate::out::outln;
 use igemu::analysis::widths::RampCheck;
@@ -350,6 +350,40 @@ fn print_truth(t: &igemu::truth::TruthReport) -> Result<(), Error> {
             f(&s.edge),
             f(&s.interior)
         );
+    }
+    Ok(())
+}
+
+/// Prints the Pareto front of sweep rows on `axes` (`igemu sweep`, `igemu sweep merge`): per
+/// scene, ordered by the first axis, with each row's configuration.
+pub fn print_front(
+    rows: &[igemu::sweep::Row],
+    axes: &[igemu::sweep::pareto::Axis],
+) -> Result<(), Error> {
+    use crate::out::out;
+    let front = igemu::sweep::pareto::front(rows, axes);
+    outln!(
+        "Pareto front on {} ({} of {} rows):",
+        axes.iter()
+            .map(|x| x.name())
+            .collect::<Vec<_>>()
+            .join(" x "),
+        front.len(),
+        rows.len()
+    );
+    out!("  {:>5}  {:<16}", "index", "scene");
+    for x in axes {
+        out!("  {:>18}", x.name());
+    }
+    outln!("  configuration");
+    for &i in &front {
+        let r = &rows[i];
+        out!("  {:>5}  {:<16}", r.index, r.scene);
+        for x in axes {
+            out!("  {:>18.4}", x.value(r));
+        }
+        let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        outln!("  {}", cfg.join(" "));
     }
     Ok(())
 }

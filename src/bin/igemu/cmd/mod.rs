@@ -7,6 +7,7 @@ pub mod cycles;
 pub mod dof;
 pub mod flicker;
 pub mod hdl;
+pub mod merge;
 pub mod ranges;
 pub mod render;
 pub mod sweep;

@@ -1,14 +1,12 @@
 //! `igemu sweep`: render every configuration of a word-width grid on the scenes, one JSON
 //! line each (resumable, shardable, parallel), and print the Pareto front.
 
-use crate::args::{TruthArgs, arg_error, load_scene};
+use crate::args::{TruthArgs, arg_error};
 use crate::guard::{Inputs, distinct_outputs};
-use crate::out::{out, outln};
 use clap::Args;
 use igemu::error::Error;
 use igemu::output;
 use igemu::pipeline;
-use igemu::scene::Scene;
 use std::io::Write;
 use std::process::ExitCode;
 
@@ -25,8 +23,8 @@ pub struct SweepArgs {
     /// Keep the complete rows already in OUT and run only the missing configurations.
     #[arg(long)]
     pub resume: bool,
-    /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run).
-    #[arg(long, value_name = "K/N")]
+    /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run); `auto` takes it from a Slurm array task (SLURM_ARRAY_TASK_ID, _MIN, _COUNT, _STEP), `auto/N` also from a Kubernetes indexed Job (JOB_COMPLETION_INDEX of N).
+    #[arg(long, value_name = "K/N|auto|auto/N")]
     pub shard: Option<String>,
     /// Configurations rendered in parallel (1 = serial; results are identical).
     #[arg(long, default_value_t = 1)]
@@ -56,7 +54,7 @@ pub struct SweepArgs {
 
 /// Runs `igemu sweep`; returns the exit code.
 pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
-    use igemu::sweep::{self, grid, pareto};
+    use igemu::sweep::{self, pareto};
     // Everything is checked before the first render.
     let mut inputs = Inputs::default();
     inputs.add("the grid file (--grid)", Some(&a.grid));
@@ -75,7 +73,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     outs.extend(a.html.as_deref().map(|p| ("--html", p)));
     distinct_outputs(&outs)?;
     let shard = match &a.shard {
-        Some(s) => Some(grid::Shard::parse(s).map_err(|m| arg_error("--shard", m))?),
+        Some(s) => Some(shard_arg(s)?),
         None => None,
     };
     if a.jobs == 0 || a.jobs > 1024 {
@@ -102,22 +100,8 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
             "the flicker axis needs the flicker metrics: add --flicker PHASES".into(),
         ));
     }
-    if !a.truth.dof_truth && axes.iter().any(|x| x.needs_truth()) {
-        return Err(arg_error(
-            "--axes",
-            "the truth_* axes need the depth-of-field truth: add --dof-truth".into(),
-        ));
-    }
-    let file = igemu::files::TomlFile::read(&a.grid)?;
-    let configs = grid::Grid::parse(&file)?.expand(&file)?;
-    let scenes: Vec<Scene> = if a.scenes.is_empty() {
-        vec![Scene::default_scene()]
-    } else {
-        a.scenes
-            .iter()
-            .map(|s| load_scene(Some(s)))
-            .collect::<Result<_, _>>()?
-    };
+    check_truth_axes(&axes, a.truth.dof_truth)?;
+    let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
     for c in &configs {
         for s in &scenes {
             pipeline::guard_band(s, &c.hw).map_err(|e| {
@@ -182,29 +166,33 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     if let Some(p) = &a.html {
         output::write_file(p, &igemu::html::sweep_page(rows, &axes, &a.grid, p)?)?;
     }
-    let front = pareto::front(rows, &axes);
-    outln!(
-        "Pareto front on {} ({} of {} rows):",
-        axes.iter()
-            .map(|x| x.name())
-            .collect::<Vec<_>>()
-            .join(" x "),
-        front.len(),
-        rows.len()
-    );
-    out!("  {:>5}  {:<16}", "index", "scene");
-    for x in &axes {
-        out!("  {:>18}", x.name());
-    }
-    outln!("  configuration");
-    for &i in &front {
-        let r = &rows[i];
-        out!("  {:>5}  {:<16}", r.index, r.scene);
-        for x in &axes {
-            out!("  {:>18.4}", x.value(r));
-        }
-        let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
-        outln!("  {}", cfg.join(" "));
-    }
+    crate::print::print_front(rows, &axes)?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The shard of `--shard`: `K/N`, or `auto`/`auto/N` from the environment of a Slurm array
+/// task or a Kubernetes indexed Job (then said on stderr).
+fn shard_arg(s: &str) -> Result<igemu::sweep::grid::Shard, Error> {
+    let (shard, from) = igemu::sweep::grid::Shard::from_arg(s, |v| std::env::var(v).ok())
+        .map_err(|m| arg_error("--shard", m))?;
+    if let Some(from) = from {
+        let _ = writeln!(
+            std::io::stderr(),
+            "igemu sweep: --shard {s}: shard {}/{} from {from}",
+            shard.k,
+            shard.n
+        );
+    }
+    Ok(shard)
+}
+
+/// Refuses a `truth_*` axis without `--dof-truth`.
+pub fn check_truth_axes(axes: &[igemu::sweep::pareto::Axis], dof_truth: bool) -> Result<(), Error> {
+    if !dof_truth && axes.iter().any(|x| x.needs_truth()) {
+        return Err(arg_error(
+            "--axes",
+            "the truth_* axes need the depth-of-field truth: add --dof-truth".into(),
+        ));
+    }
+    Ok(())
 }
