@@ -36,6 +36,19 @@ impl Inputs {
         self.check_path(flag, out, Path::new(out))
     }
 
+    /// Refuses every given output (flag, path) that is one of the inputs, and two outputs
+    /// that name the same file.
+    pub fn check_outputs(&self, outs: &[(&str, Option<&str>)]) -> Result<(), Error> {
+        let given: Vec<(&str, &str)> = outs
+            .iter()
+            .filter_map(|&(flag, p)| p.map(|p| (flag, p)))
+            .collect();
+        for (flag, p) in &given {
+            self.check(flag, p)?;
+        }
+        distinct_outputs(&given)
+    }
+
     /// Refuses any of `names` in the folder `dir` (the value of `flag`) that is an input.
     pub fn check_in<S: AsRef<str>>(
         &self,

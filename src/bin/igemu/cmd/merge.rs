@@ -4,7 +4,7 @@
 //! subcommand.
 
 use crate::args::{TruthArgs, arg_error};
-use crate::guard::{Inputs, distinct_outputs};
+use crate::guard::Inputs;
 use clap::{Args, Subcommand};
 use igemu::error::Error;
 use igemu::sweep::{self, merge, pareto};
@@ -114,18 +114,14 @@ fn run_merge(a: MergeArgs) -> Result<ExitCode, Error> {
     for p in &a.parts {
         inputs.add("a part file", Some(p));
     }
-    inputs.check("--out", &a.out)?;
+    inputs.check_outputs(&[
+        ("--out", Some(&a.out)),
+        ("--plot", a.plot.as_deref()),
+        ("--html", a.html.as_deref()),
+    ])?;
     if let Some(p) = &a.plot {
-        inputs.check("--plot", p)?;
         sweep::plot::PlotFormat::of(p).map_err(|m| arg_error("--plot", m))?;
     }
-    if let Some(p) = &a.html {
-        inputs.check("--html", p)?;
-    }
-    let mut outs = vec![("--out", a.out.as_str())];
-    outs.extend(a.plot.as_deref().map(|p| ("--plot", p)));
-    outs.extend(a.html.as_deref().map(|p| ("--html", p)));
-    distinct_outputs(&outs)?;
     let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
     super::sweep::check_truth_axes(&axes, a.truth.dof_truth)?;
     let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;

@@ -2,7 +2,7 @@
 //! line each (resumable, shardable, parallel), and print the Pareto front.
 
 use crate::args::{TruthArgs, arg_error};
-use crate::guard::{Inputs, distinct_outputs};
+use crate::guard::Inputs;
 use clap::Args;
 use igemu::error::Error;
 use igemu::output;
@@ -61,17 +61,11 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     for s in &a.scenes {
         inputs.add("a scene file", Some(s));
     }
-    inputs.check("--out", &a.out)?;
-    if let Some(p) = &a.plot {
-        inputs.check("--plot", p)?;
-    }
-    if let Some(p) = &a.html {
-        inputs.check("--html", p)?;
-    }
-    let mut outs = vec![("--out", a.out.as_str())];
-    outs.extend(a.plot.as_deref().map(|p| ("--plot", p)));
-    outs.extend(a.html.as_deref().map(|p| ("--html", p)));
-    distinct_outputs(&outs)?;
+    inputs.check_outputs(&[
+        ("--out", Some(&a.out)),
+        ("--plot", a.plot.as_deref()),
+        ("--html", a.html.as_deref()),
+    ])?;
     let shard = match &a.shard {
         Some(s) => Some(shard_arg(s)?),
         None => None,
