@@ -649,7 +649,20 @@ fn unknown_fields_and_kinds_are_rejected() {
         scene_text("[[object]]\nkind = \"sphere\"\ncenter = [0, 0, -5]\nradius = 1\nradiuss = 2\n");
     let e = parse_err(&text);
     assert_eq!(e.line, Some(line_of(&text, "radiuss")), "{e}");
-    assert!(e.msg.contains("unknown field"), "{e}");
+    assert_eq!(e.field, "object[0].radiuss", "{e}");
+    // The fields of the object's own kind, not of every kind.
+    assert!(
+        e.msg.contains("unknown field `radiuss` for an object of kind \"sphere\"; allowed: `kind`, `center`, `radius`, `tessellation`,"),
+        "{e}"
+    );
+    assert!(!e.msg.contains("major_radius"), "{e}");
+    // An unknown kind as well: serde's list of every field stays.
+    let text = scene_text("[[object]]\nkind = \"pyramid\"\nradiuss = 2\n");
+    let e = parse_err(&text);
+    assert!(
+        e.msg.contains("unknown field `radiuss`; allowed: `kind`,"),
+        "{e}"
+    );
 
     let text = scene_text("[[object]]\nkind = \"pyramid\"\n");
     assert_err(

@@ -168,7 +168,9 @@ impl Ctx<'_> {
 }
 
 pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
-    let raw: RawScene = file.parse_with(&hint)?;
+    let raw: RawScene = file
+        .parse_with(&hint)
+        .map_err(|e| objects::unknown_field_of_kind(file, e))?;
     let c = Ctx { file };
     let name = raw.name.unwrap_or_else(|| stem(&file.name));
     let image = image(&c, &raw.image)?;

@@ -114,6 +114,41 @@ fn allowed(kind: &str) -> Option<&'static [&'static str]> {
     })
 }
 
+/// An unknown field of an `[[object]]` (serde's message lists the fields of every kind):
+/// the fields of the object's own `kind`, when the file gives a known one.
+pub(super) fn unknown_field_of_kind(
+    file: &crate::files::TomlFile,
+    mut e: crate::error::FileError,
+) -> crate::error::FileError {
+    let Some(rest) = e.field.strip_prefix("object[") else {
+        return e;
+    };
+    let Some((index, name)) = rest.split_once("].") else {
+        return e;
+    };
+    if name.contains(['.', '[']) || !e.msg.starts_with("unknown field") {
+        return e;
+    }
+    let kind = toml::from_str::<toml::Table>(&file.text)
+        .ok()
+        .and_then(|t| {
+            let objects = t.get("object")?.as_array()?;
+            let o = objects.get(index.parse::<usize>().ok()?)?;
+            Some(o.get("kind")?.as_str()?.to_string())
+        });
+    if let Some((kind, fields)) = kind.and_then(|k| Some((k.clone(), allowed(&k)?))) {
+        let list: Vec<String> = std::iter::once("kind")
+            .chain(fields.iter().copied())
+            .map(|f| format!("`{f}`"))
+            .collect();
+        e.msg = format!(
+            "unknown field `{name}` for an object of kind \"{kind}\"; allowed: {} (check the spelling)",
+            list.join(", ")
+        );
+    }
+    e
+}
+
 /// One `[[object]]` of an image of `size = (width, height)` pixels (which bounds line widths
 /// and light-point sizes).
 pub(super) fn object(c: &Ctx, p: &str, o: &RawObject, size: (u32, u32)) -> R<Object> {
