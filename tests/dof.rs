@@ -549,6 +549,17 @@ fn dof_stage_reports_the_out_signal_in_the_frame_format() {
     let out = &d.signals[2];
     assert_eq!(out.format, hw.accumulate.frame.format);
     assert_eq!(out.overflows, 0);
+    // The line and accumulator words in their configured widths (40 bits: wider than a
+    // quantiser's format, a label only).
+    assert_eq!(
+        d.signals[0].format.to_string(),
+        format!("UQ{}.0", hw.dof.line_bits)
+    );
+    assert_eq!(
+        d.signals[1].format.to_string(),
+        format!("UQ{}.0", hw.dof.acc_bits)
+    );
+    assert!(hw.dof.acc_bits > 32);
 }
 
 /// The depth code of screen z as before the quantiser: `f64::round`.

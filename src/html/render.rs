@@ -324,7 +324,7 @@ fn stage_row(s: &crate::stage::StageReport) -> StageRow {
                 SignalRow {
                     name: g.name.clone(),
                     format: f.to_string(),
-                    range: format!("{}..{}", f.min_code(), f.max_code()),
+                    range: code_range(f),
                     count: g.count,
                     seen: match (g.min, g.max) {
                         (Some(a), Some(b)) => format!("{a}..{b}"),
@@ -343,6 +343,15 @@ fn stage_row(s: &crate::stage::StageReport) -> StageRow {
                 }
             })
             .collect(),
+    }
+}
+
+/// The codes a format holds (`0..4095`); a wide accumulator's label (`UQ40.0`) as its
+/// width, where the codes would not fit an `i64`.
+fn code_range(f: crate::fixed::QFormat) -> String {
+    match f.total_bits() {
+        1..=62 => format!("{}..{}", f.min_code(), f.max_code()),
+        w => format!("a {w}-bit word"),
     }
 }
 
@@ -379,4 +388,17 @@ fn cycle_facts(r: &Render) -> Vec<(String, String)> {
             ),
         ),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::code_range;
+    use crate::fixed::QFormat;
+
+    #[test]
+    fn code_ranges_of_narrow_and_wide_formats() {
+        assert_eq!(code_range(QFormat::new(false, 12, 0)), "0..4095");
+        assert_eq!(code_range(QFormat::new(true, 4, 4)), "-128..127");
+        assert_eq!(code_range(QFormat::new(false, 96, 0)), "a 96-bit word");
+    }
 }

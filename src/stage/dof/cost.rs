@@ -179,7 +179,7 @@ pub fn coefficient_image(plan: &LayerPlan, p: &DofCfg) -> MemImage {
 
 /// Stats record for an overflow count of an integer word of `bits` bits (`UQ<bits>.0`).
 pub fn overflow_signal(name: &str, bits: u32, n: u64) -> SignalStats {
-    overflow_signal_in(name, QFormat::new(false, bits.min(32), 0), n)
+    overflow_signal_in(name, QFormat::new(false, bits, 0), n)
 }
 
 /// Stats record for an overflow count of a signal in `format`.

@@ -52,10 +52,10 @@ impl LumParams {
         )
     }
 
-    /// Format of the pre-blur window sum: `UQ<pre_bits>.0` frame codes (reported at most
-    /// 32 bits wide).
+    /// Format of the pre-blur window sum: `UQ<pre_bits>.0` frame codes (a label of the
+    /// report: it may be wider than a quantiser's 32 bits).
     pub fn sum_format(&self) -> QFormat {
-        QFormat::new(false, self.pre_bits.min(32), 0)
+        QFormat::new(false, self.pre_bits, 0)
     }
 }
 
