@@ -4,7 +4,7 @@
 
 use super::timeline::Timeline;
 use crate::cycles::State;
-use crate::sweep::plot::{font, padded, tick};
+use crate::sweep::plot::{font, legend, padded, tick};
 use plotters::prelude::*;
 
 /// How a series is drawn.
@@ -97,14 +97,7 @@ pub fn curves(f: &Frame, series: &[Series]) -> DrawResult<String> {
                 .label(&s.name)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], c.stroke_width(3)));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 12))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(err)?;
         root.present().map_err(err)?;
     }
     Ok(text)
@@ -231,14 +224,7 @@ pub fn timeline(f: &Frame, t: &Timeline, names: &[String]) -> DrawResult<String>
                     Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour.filled())
                 });
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 12))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(err)?;
         root.present().map_err(err)?;
     }
     Ok(text)
