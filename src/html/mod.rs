@@ -1,7 +1,7 @@
 //! The HTML reports: `igemu render --html` and `igemu sweep --html` (and `sweep merge`).
 //!
-//! One self-contained file each, built from `minijinja` templates ([`render.html`],
-//! [`sweep.html`], both extending `base.html`): every picture is an inline PNG and every
+//! One self-contained file each, built from `minijinja` templates (`render.html`,
+//! `sweep.html`, both extending `base.html`): every picture is an inline PNG and every
 //! plot an inline SVG (`data:` URIs), the only script is the sweep table's sort, and a
 //! Content-Security-Policy forbids any other source, so the file can be mailed or attached
 //! to a review and opens without a network. The text and JSON outputs are not changed by it.
