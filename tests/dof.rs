@@ -901,3 +901,49 @@ fn float_layers_use_the_fixed_mask_support_on_a_depth_ramp() {
     });
     assert!(tail_zero);
 }
+
+/// The preset widths are exactly the sums the layered passes reach at 4x4 samples; with 8x8
+/// samples the line sum needs 2 more bits: the plan says so (with the widths that hold every
+/// sum), the render counts the saturated sums, and with those widths both go away.
+#[test]
+fn a_line_word_too_narrow_for_the_samples_is_named_in_the_plan() {
+    for preset in ["linear12", "linear11", "linear8", "log8-logadd"] {
+        let hw = HwConfig::preset(preset).unwrap();
+        let n2 = hw.raster.samples * hw.raster.samples;
+        assert_eq!(
+            igemu::stage::dof::reachable_bits(hw.accumulate.frame.format, n2, &hw.dof),
+            (hw.dof.line_bits, hw.dof.acc_bits),
+            "{preset}"
+        );
+    }
+    let scene = Scene::default_scene();
+    let dof_overflows = |hw: &HwConfig| {
+        let r = pipeline::render(&scene, hw, RunOptions::FAST).unwrap();
+        let d = r.report.stages.iter().find(|s| s.name == "dof").unwrap();
+        let n: u64 = d.signals.iter().map(|s| s.overflows).sum();
+        (r.report.plan.notes, n)
+    };
+    let (notes, n) = dof_overflows(&HwConfig::default_config());
+    assert!(
+        notes.iter().all(|t| !t.contains("dof.line_bits")),
+        "{notes:?}"
+    );
+    assert_eq!(n, 0);
+    let mut hw = HwConfig::default_config();
+    hw.raster.samples = 8;
+    let (notes, n) = dof_overflows(&hw);
+    let note = notes.iter().find(|t| t.contains("dof.line_bits = 28 < 30"));
+    assert!(
+        note.is_some_and(|t| t.contains("every sum fits dof.line_bits = 30, dof.acc_bits = 42")),
+        "{notes:?}"
+    );
+    assert!(n > 0, "the narrow line word saturates");
+    hw.dof.line_bits = 30;
+    hw.dof.acc_bits = 42;
+    let (notes, n) = dof_overflows(&hw);
+    assert!(
+        notes.iter().all(|t| !t.contains("dof.line_bits")),
+        "{notes:?}"
+    );
+    assert_eq!(n, 0, "the widths of the note hold every sum");
+}

@@ -254,6 +254,14 @@ impl Plan {
                 ));
             }
         }
+        if self.layout.has(StageId::Dof) && hw.dof.kind == crate::config::DofKind::Layered {
+            let n2 = hw.raster.samples * hw.raster.samples;
+            notes.extend(stage::dof::width_note(
+                hw.accumulate.frame.format,
+                n2,
+                &hw.dof,
+            ));
+        }
         let k = kernel(hw);
         let n = k.n as i64;
         let reach = k.off.max(k.size as i64 - n - k.off);

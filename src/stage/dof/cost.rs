@@ -182,6 +182,42 @@ pub fn overflow_signal(name: &str, bits: u32, n: u64) -> SignalStats {
     overflow_signal_in(name, QFormat::new(false, bits, 0), n)
 }
 
+/// The widths the layered passes' sums can reach: (line, accumulator) bits of the largest
+/// horizontal sum, a full-white frame code (`frame` bits) of full coverage (`n2` samples)
+/// under taps summing to `2^coef_bits`, and of the largest vertical sum of saturated line
+/// words (`line_bits` at most). A bright region of one layer reaches them.
+pub fn reachable_bits(frame: QFormat, n2: u32, p: &DofCfg) -> (u32, u32) {
+    let bits = |v: u128| 128 - v.leading_zeros();
+    let white = (1u128 << frame.total_bits()) - 1;
+    let line = bits((white * u128::from(n2)) << p.coef_bits);
+    (line, line.min(p.line_bits) + p.coef_bits)
+}
+
+/// A note when the configured `dof.line_bits` or `dof.acc_bits` is narrower than what the
+/// layered passes can reach ([`reachable_bits`]): such sums saturate (or wrap, or stop an
+/// `ERROR` run) and are counted as `dof.line` / `dof.acc` overflows.
+pub fn width_note(frame: QFormat, n2: u32, p: &DofCfg) -> Option<String> {
+    let (line, acc) = reachable_bits(frame, n2, p);
+    let short: Vec<String> = [
+        ("line_bits", p.line_bits, line),
+        ("acc_bits", p.acc_bits, acc),
+    ]
+    .iter()
+    .filter(|(_, have, need)| have < need)
+    .map(|(name, have, need)| format!("dof.{name} = {have} < {need}"))
+    .collect();
+    (!short.is_empty()).then(|| {
+        format!(
+            "{}: the layered blur's sums of a bright region (frame code {} of {n2} covered samples, taps summing to 2^{}) do not fit; they overflow (mode {}) and are counted as dof.line / dof.acc overflows; every sum fits dof.line_bits = {line}, dof.acc_bits = {}",
+            short.join(", "),
+            (1u64 << frame.total_bits()) - 1,
+            p.coef_bits,
+            p.overflow,
+            line + p.coef_bits
+        )
+    })
+}
+
 /// Stats record for an overflow count of a signal in `format`.
 pub fn overflow_signal_in(name: &str, format: QFormat, n: u64) -> SignalStats {
     let mut s = SignalStats::new(name, format);

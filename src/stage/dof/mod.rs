@@ -108,7 +108,7 @@ mod uniform;
 
 pub use cost::{
     COEF_ROM, COMPOSITE, LINE_BUFFERS, SIGMA_ROM, coefficient_image, cost, lens_cost,
-    overflow_signal, overflow_signal_in, sigma_rom_image,
+    overflow_signal, overflow_signal_in, reachable_bits, sigma_rom_image, width_note,
 };
 pub use fixed::{
     DofWork, Exec, FixedRun, LayerPlanes, MacOut, STRIP_ROWS, border_sum, layered_fixed,
