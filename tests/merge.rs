@@ -443,17 +443,7 @@ fn lib_sweep(
         .expand(&file)
         .expect("expand");
     let out = path(d, "lib.jsonl");
-    let opts = sweep::SweepOptions {
-        out: &out,
-        resume: false,
-        shard: None,
-        jobs: 1,
-        cache: None,
-        flicker: None,
-        max_memory: None,
-        dof_truth: None,
-    };
-    let s = sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).expect("sweep");
+    let s = common::run_sweep(&out, &configs, std::slice::from_ref(&scene), false);
     (configs, vec![scene], s.rows)
 }
 

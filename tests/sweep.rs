@@ -542,26 +542,6 @@ fn expand(text: &str) -> Vec<grid::Config> {
     grid::Grid::parse(&f).unwrap().expand(&f).unwrap()
 }
 
-/// Runs `configs` on `scenes` into `out` through the library (serial, no stage reuse).
-fn run_lib(
-    out: &str,
-    configs: &[grid::Config],
-    scenes: &[igemu::scene::Scene],
-    resume: bool,
-) -> sweep::SweepSummary {
-    let opts = sweep::SweepOptions {
-        out,
-        resume,
-        shard: None,
-        jobs: 1,
-        cache: None,
-        flicker: None,
-        max_memory: None,
-        dof_truth: None,
-    };
-    sweep::run(configs, scenes, &opts, &|_, _| {}).unwrap()
-}
-
 fn counts(s: &sweep::SweepSummary) -> (usize, usize, usize) {
     (s.reused, s.dropped, s.computed)
 }
@@ -629,23 +609,23 @@ fn resume_after_editing_the_scene_recomputes_every_row() {
     let configs = expand("gamma.dac_bits = [6, 8]\n");
     let out = d.join("o.jsonl").to_string_lossy().into_owned();
     let old = Scene::load(&path).unwrap();
-    let first = run_lib(&out, &configs, std::slice::from_ref(&old), false);
+    let first = common::run_sweep(&out, &configs, std::slice::from_ref(&old), false);
     assert_eq!(counts(&first), (0, 0, 2));
     // A comment and other spacing: the same scene as parsed, every row kept.
     let text = format!("# edited\n{}\n\n", scene_text(0.02).replace(" = ", "="));
     std::fs::write(&path, text).unwrap();
     let same = Scene::load(&path).unwrap();
-    let s = run_lib(&out, &configs, std::slice::from_ref(&same), true);
+    let s = common::run_sweep(&out, &configs, std::slice::from_ref(&same), true);
     assert_eq!(counts(&s), (2, 0, 0));
     assert_eq!(s.rows, first.rows, "kept as they were, timing included");
     // A real edit under the same name: every row recomputed, the old ones dropped.
     std::fs::write(&path, scene_text(0.1)).unwrap();
     let edited = Scene::load(&path).unwrap();
     assert_eq!(edited.name, old.name);
-    let s = run_lib(&out, &configs, std::slice::from_ref(&edited), true);
+    let s = common::run_sweep(&out, &configs, std::slice::from_ref(&edited), true);
     assert_eq!(counts(&s), (0, 2, 2));
     let fresh_out = d.join("fresh.jsonl").to_string_lossy().into_owned();
-    let fresh = run_lib(&fresh_out, &configs, std::slice::from_ref(&edited), false);
+    let fresh = common::run_sweep(&fresh_out, &configs, std::slice::from_ref(&edited), false);
     assert_eq!(json(&s.rows), json(&fresh.rows));
     assert_ne!(
         json(&s.rows),
@@ -661,10 +641,10 @@ fn resume_after_an_equivalent_spelling_of_the_grid_keeps_the_rows() {
     let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
     let scenes = std::slice::from_ref(&scene);
     let out = d.join("o.jsonl").to_string_lossy().into_owned();
-    let first = run_lib(&out, &expand("gamma.dac_bits = [6, 8]\n"), scenes, false);
+    let first = common::run_sweep(&out, &expand("gamma.dac_bits = [6, 8]\n"), scenes, false);
     // The default preset named, the values in the other order: the same two machines.
     let respelled = expand("preset = [\"linear12\"]\ngamma.dac_bits = [8, 6]\n");
-    let s = run_lib(&out, &respelled, scenes, true);
+    let s = common::run_sweep(&out, &respelled, scenes, true);
     assert_eq!(counts(&s), (2, 0, 0));
     assert_eq!(
         s.rows[0].error, first.rows[1].error,
@@ -676,7 +656,7 @@ fn resume_after_an_equivalent_spelling_of_the_grid_keeps_the_rows() {
     );
     // Relabelled with the new grid: the file equals a fresh run of the new grid.
     let fresh_out = d.join("fresh.jsonl").to_string_lossy().into_owned();
-    let fresh = run_lib(&fresh_out, &respelled, scenes, false);
+    let fresh = common::run_sweep(&fresh_out, &respelled, scenes, false);
     assert_eq!(json(&s.rows), json(&fresh.rows));
     assert_eq!(rows(&out), json(&fresh.rows));
     // Two spellings of one machine in one grid share an id; both jobs get their row.
@@ -690,14 +670,14 @@ fn resume_after_an_equivalent_spelling_of_the_grid_keeps_the_rows() {
             c
         })
         .collect();
-    let s = run_lib(&out, &twice, scenes, true);
+    let s = common::run_sweep(&out, &twice, scenes, true);
     assert_eq!(counts(&s), (2, 1, 0), "the dac_bits 6 row is not asked for");
     assert_eq!(s.rows[0].id, s.rows[1].id);
     assert_eq!(rows(&out).len(), 2);
-    let s = run_lib(&out, &twice, scenes, true);
+    let s = common::run_sweep(&out, &twice, scenes, true);
     assert_eq!(counts(&s), (2, 0, 0));
     // A changed grid: the common machine is kept, the new one computed.
-    let s = run_lib(&out, &expand("gamma.dac_bits = [8, 9]\n"), scenes, true);
+    let s = common::run_sweep(&out, &expand("gamma.dac_bits = [8, 9]\n"), scenes, true);
     assert_eq!(counts(&s), (1, 1, 1));
 }
 
@@ -709,7 +689,7 @@ fn resume_drops_and_counts_partial_foreign_and_duplicate_lines() {
     let scenes = std::slice::from_ref(&scene);
     let configs = expand("gamma.dac_bits = [6, 8]\n");
     let out = d.join("o.jsonl").to_string_lossy().into_owned();
-    let first = run_lib(&out, &configs, scenes, false);
+    let first = common::run_sweep(&out, &configs, scenes, false);
     let text = std::fs::read_to_string(&out).unwrap();
     let line0 = text.lines().next().unwrap().to_string();
     let mut foreign = first.rows[1].clone();
@@ -722,14 +702,14 @@ fn resume_drops_and_counts_partial_foreign_and_duplicate_lines() {
         f.write_all(b"{\"id\":\"0123\",\"index\":").unwrap(); // a killed write
     }
     assert_eq!(sweep::read_rows(&out).unwrap().1, 2);
-    let s = run_lib(&out, &configs, scenes, true);
+    let s = common::run_sweep(&out, &configs, scenes, true);
     assert_eq!(counts(&s), (2, 4, 0));
     assert_eq!(s.rows, first.rows);
     assert_eq!(sweep::read_rows(&out).unwrap(), (first.rows.clone(), 0));
     // A last line without its newline is partial even when it parses: dropped and recomputed.
     let text = std::fs::read_to_string(&out).unwrap();
     std::fs::write(&out, text.trim_end()).unwrap();
-    let s = run_lib(&out, &configs, scenes, true);
+    let s = common::run_sweep(&out, &configs, scenes, true);
     assert_eq!(counts(&s), (1, 1, 1));
     assert_eq!(json(&s.rows), json(&first.rows));
     assert_eq!(rows(&out), json(&first.rows));
@@ -845,7 +825,7 @@ mod files {
         let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
         let out = d.join("o.jsonl").to_string_lossy().into_owned();
         let configs = expand("gamma.dac_bits = [6, 8]\n");
-        let s = run_lib(&out, &configs, std::slice::from_ref(&scene), false);
+        let s = common::run_sweep(&out, &configs, std::slice::from_ref(&scene), false);
         (d, s.rows)
     }
 

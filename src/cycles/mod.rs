@@ -136,6 +136,40 @@ pub struct CycleReport {
     pub cost: CostSummary,
 }
 
+impl CycleReport {
+    /// The two summary lines of the text report and the HTML page: the frame (cycles,
+    /// bottleneck, bounds, frame-port-bound cycles) and the frame rate against the display.
+    pub fn summary_lines(&self) -> [String; 2] {
+        let t = &self.throughput;
+        [
+            format!(
+                "frame: {} cycles | bottleneck {} | bounds {} <= {} <= {} {} | frame-port-bound cycles {}",
+                self.total_cycles,
+                self.bottleneck,
+                self.lower_bound,
+                self.total_cycles,
+                self.upper_bound,
+                if self.bounds_hold { "hold" } else { "VIOLATED" },
+                self.frame_port_bound_cycles
+            ),
+            format!(
+                "at {} MHz: {:.3} ms/frame, {:.1} fps, {:.2} Mpixel/s | display needs {} Hz = {:.2} Mpixel/s: {}",
+                t.clock_mhz,
+                t.frame_ms,
+                t.fps,
+                t.pixel_rate / 1e6,
+                t.refresh_hz,
+                t.required_pixel_rate / 1e6,
+                if t.real_time {
+                    "real time"
+                } else {
+                    "NOT real time"
+                }
+            ),
+        ]
+    }
+}
+
 /// The report section of a simulation `r` of `w` (`wall`: its wall time, seconds) at
 /// `clock_mhz` against a display of `refresh_hz`.
 pub fn report(

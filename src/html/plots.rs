@@ -50,19 +50,34 @@ fn err(e: impl std::fmt::Display) -> String {
     e.to_string()
 }
 
-/// Draws `series` into one chart (SVG text).
-pub fn curves(f: &Frame, series: &[Series]) -> DrawResult<String> {
+/// An SVG of `f.size` on white: `draw` gets a chart builder with the frame's title,
+/// margin and label areas (`y_area` wide on the left) and draws the chart.
+fn svg(
+    f: &Frame,
+    y_area: u32,
+    draw: impl FnOnce(ChartBuilder<'_, '_, SVGBackend<'_>>) -> DrawResult<()>,
+) -> DrawResult<String> {
     font();
-    let all = || series.iter().flat_map(|s| s.points.iter());
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, f.size).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&f.title, ("sans-serif", 17))
+        let mut b = ChartBuilder::on(&root);
+        b.caption(&f.title, ("sans-serif", 17))
             .margin(12)
             .x_label_area_size(40)
-            .y_label_area_size(60)
+            .y_label_area_size(y_area);
+        draw(b)?;
+        root.present().map_err(err)?;
+    }
+    Ok(text)
+}
+
+/// Draws `series` into one chart (SVG text).
+pub fn curves(f: &Frame, series: &[Series]) -> DrawResult<String> {
+    let all = || series.iter().flat_map(|s| s.points.iter());
+    svg(f, 60, |mut b| {
+        let mut chart = b
             .build_cartesian_2d(padded(all().map(|p| p.0)), padded(all().map(|p| p.1)))
             .map_err(err)?;
         chart
@@ -97,10 +112,8 @@ pub fn curves(f: &Frame, series: &[Series]) -> DrawResult<String> {
                 .label(&s.name)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], c.stroke_width(3)));
         }
-        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(err)?;
-        root.present().map_err(err)?;
-    }
-    Ok(text)
+        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(err)
+    })
 }
 
 /// The histogram of code differences (fixed minus reference) with a logarithmic count axis.
@@ -109,15 +122,8 @@ pub fn histogram(f: &Frame, bars: &[(i64, u64)]) -> DrawResult<String> {
     let lo = bars.iter().map(|b| b.0).min().unwrap_or(0) - 1;
     let hi = bars.iter().map(|b| b.0).max().unwrap_or(0) + 1;
     let top = bars.iter().map(|b| b.1).max().unwrap_or(1).max(1) as f64 * 3.0;
-    let mut text = String::new();
-    {
-        let root = SVGBackend::with_string(&mut text, f.size).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&f.title, ("sans-serif", 17))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
+    svg(f, 60, |mut b| {
+        let mut chart = b
             .build_cartesian_2d(lo as f64 - 0.5..hi as f64 + 0.5, (0.5f64..top).log_scale())
             .map_err(err)?;
         chart
@@ -146,9 +152,8 @@ pub fn histogram(f: &Frame, bars: &[(i64, u64)]) -> DrawResult<String> {
                 )
             }))
             .map_err(err)?;
-        root.present().map_err(err)?;
-    }
-    Ok(text)
+        Ok(())
+    })
 }
 
 /// State colours of the timeline: busy, stalled, starved, idle.
@@ -162,17 +167,9 @@ pub const STATE_COLOURS: [(State, &str, RGBColor); 4] = [
 /// One band per stage (first on top); within a bin the band is split by the share of each
 /// state, busy at the bottom.
 pub fn timeline(f: &Frame, t: &Timeline, names: &[String]) -> DrawResult<String> {
-    font();
     let ns = t.counts.len();
-    let mut text = String::new();
-    {
-        let root = SVGBackend::with_string(&mut text, f.size).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&f.title, ("sans-serif", 17))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(90)
+    svg(f, 90, |mut b| {
+        let mut chart = b
             .build_cartesian_2d(0f64..t.total.max(1) as f64, 0f64..ns as f64)
             .map_err(err)?;
         chart
@@ -224,8 +221,6 @@ pub fn timeline(f: &Frame, t: &Timeline, names: &[String]) -> DrawResult<String>
                     Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour.filled())
                 });
         }
-        legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(err)?;
-        root.present().map_err(err)?;
-    }
-    Ok(text)
+        legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(err)
+    })
 }

@@ -32,8 +32,8 @@ pub struct RenderPage {
     pub stages: Vec<StageRow>,
     /// Totals row: fixed ms, float ms, overflows.
     pub totals: (String, String, u64),
-    /// Cycle summary lines.
-    pub cycles: Vec<(String, String)>,
+    /// Cycle summary lines (as the text report prints them).
+    pub cycles: Vec<String>,
     /// Cycle table rows.
     pub cycle_rows: Vec<Vec<String>>,
     /// Plots.
@@ -181,7 +181,7 @@ pub fn page(scene: &Scene, hw: &HwConfig, r: &Render) -> figures::Result<RenderP
             ms(rep.timing.float_ms),
             rep.overflows,
         ),
-        cycles: cycle_facts(r),
+        cycles: rep.cycles.summary_lines().into(),
         cycle_rows: rep
             .cycles
             .stages
@@ -353,41 +353,6 @@ fn code_range(f: crate::fixed::QFormat) -> String {
         1..=62 => format!("{}..{}", f.min_code(), f.max_code()),
         w => format!("a {w}-bit word"),
     }
-}
-
-fn cycle_facts(r: &Render) -> Vec<(String, String)> {
-    let c = &r.report.cycles;
-    let t = &c.throughput;
-    vec![
-        (
-            "frame".into(),
-            format!(
-                "{} cycles | bottleneck {} | bounds {} <= {} <= {} {}",
-                c.total_cycles,
-                c.bottleneck,
-                c.lower_bound,
-                c.total_cycles,
-                c.upper_bound,
-                if c.bounds_hold { "hold" } else { "VIOLATED" }
-            ),
-        ),
-        (
-            format!("at {} MHz", t.clock_mhz),
-            format!(
-                "{:.3} ms/frame, {:.1} fps, {:.2} Mpixel/s; {} Hz needs {:.2} Mpixel/s: {}",
-                t.frame_ms,
-                t.fps,
-                t.pixel_rate / 1e6,
-                t.refresh_hz,
-                t.required_pixel_rate / 1e6,
-                if t.real_time {
-                    "real time"
-                } else {
-                    "NOT real time"
-                }
-            ),
-        ),
-    ]
 }
 
 #[cfg(test)]

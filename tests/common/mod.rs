@@ -203,3 +203,23 @@ pub fn rows_without_timing(path: &str) -> Vec<serde_json::Value> {
     assert_eq!(skipped, 0, "{path} has a partial or bad line");
     rows.iter().map(igemu::sweep::without_timing).collect()
 }
+
+/// Runs `configs` on `scenes` into `out` through the library (serial, no stage reuse).
+pub fn run_sweep(
+    out: &str,
+    configs: &[igemu::sweep::grid::Config],
+    scenes: &[Scene],
+    resume: bool,
+) -> igemu::sweep::SweepSummary {
+    let opts = igemu::sweep::SweepOptions {
+        out,
+        resume,
+        shard: None,
+        jobs: 1,
+        cache: None,
+        flicker: None,
+        max_memory: None,
+        dof_truth: None,
+    };
+    igemu::sweep::run(configs, scenes, &opts, &|_, _| {}).expect("sweep")
+}

@@ -58,31 +58,9 @@ pub fn print_cycles(c: &CycleReport) -> Result<(), Error> {
             s.item
         );
     }
-    let t = &c.throughput;
-    outln!(
-        "frame: {} cycles | bottleneck {} | bounds {} <= {} <= {} {} | frame-port-bound cycles {}",
-        c.total_cycles,
-        c.bottleneck,
-        c.lower_bound,
-        c.total_cycles,
-        c.upper_bound,
-        if c.bounds_hold { "hold" } else { "VIOLATED" },
-        c.frame_port_bound_cycles
-    );
-    outln!(
-        "at {} MHz: {:.3} ms/frame, {:.1} fps, {:.2} Mpixel/s | display needs {} Hz = {:.2} Mpixel/s: {}",
-        t.clock_mhz,
-        t.frame_ms,
-        t.fps,
-        t.pixel_rate / 1e6,
-        t.refresh_hz,
-        t.required_pixel_rate / 1e6,
-        if t.real_time {
-            "real time"
-        } else {
-            "NOT real time"
-        }
-    );
+    for line in c.summary_lines() {
+        outln!("{line}");
+    }
     let k = &c.cost;
     let list = |m: &BTreeMap<String, u64>| {
         m.iter()
