@@ -57,7 +57,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| black_box(layered_f64(&fimg, &plan)))
     });
     grp.bench_function("per_pixel_scatter_f64", |b| {
-        b.iter(|| black_box(per_pixel_scatter(&fimg, &lens, hw.dof.k)))
+        b.iter(|| black_box(per_pixel_scatter(&fimg, &lens, hw.dof.k, hw.dof.kernel)))
     });
     grp.finish();
     // The ratios, from one run: best of 5 each.
@@ -83,7 +83,7 @@ fn bench(c: &mut Criterion) {
         black_box(layered_f64(&fimg, &plan));
     });
     let tp = best(&|| {
-        black_box(per_pixel_scatter(&fimg, &lens, hw.dof.k));
+        black_box(per_pixel_scatter(&fimg, &lens, hw.dof.k, hw.dof.kernel));
     });
     eprintln!(
         "dof ratios ({w}x{h}, {} layers): per-pixel / layered-float = {:.2}, per-pixel / layered-fixed = {:.2}, fixed / float layered = {:.2} (ms: fixed {:.1}, float {:.1}, per-pixel {:.1})",

@@ -4,7 +4,7 @@
 mod common;
 
 use common::Rng;
-use igemu::config::{DofCfg, HwConfig, SigmaForm};
+use igemu::config::{DofCfg, DofKernel, HwConfig, SigmaForm};
 use igemu::fixed::{Overflow, QFormat, Quant, round_shift};
 use igemu::pipeline;
 use igemu::scene::{Lens, Scene, depth_from_screen_z};
@@ -110,7 +110,7 @@ fn theorem_additive_layered_within_p_on_random_depth_images() {
             let plan = img.plan(&p);
             let vf = img.vf();
             let fi = fimg(&img, &vf);
-            let pp = per_pixel_scatter(&fi, &lens(), p.k);
+            let pp = per_pixel_scatter(&fi, &lens(), p.k, DofKernel::Gaussian);
             let s_f = difference_degree(&additive_layered(&fi, &plan, p.coef_bits, false), &pp);
             let s_q = difference_degree(&additive_layered(&fi, &plan, p.coef_bits, true), &pp);
             assert!(s_f < pv, "P = {pv}: float additive layered S = {s_f}");
@@ -167,7 +167,7 @@ fn theorem_on_default_scene_for_several_p_and_composited_departure() {
         cov: &a.frame.coverage,
         n2: 16,
     };
-    let pp = per_pixel_scatter(&img, &lm, hw.dof.k);
+    let pp = per_pixel_scatter(&img, &lm, hw.dof.k, DofKernel::Gaussian);
     for &pv in &[0.02, 0.05, 0.1, 0.2] {
         let p = DofCfg {
             p: pv,
@@ -336,7 +336,7 @@ fn hard_case_sharp_object_in_front_of_blurred_background() {
         }
     }
     let vf = img.vf();
-    let pp = per_pixel_scatter(&fimg(&img, &vf), &lens(), 0.05);
+    let pp = per_pixel_scatter(&fimg(&img, &vf), &lens(), 0.05, DofKernel::Gaussian);
     let pp_leak = (0..w * h)
         .filter(|&i| {
             let (x, y) = (i % w, i / w);
@@ -386,7 +386,7 @@ fn hard_case_blurred_foreground_over_sharp_background() {
     let fringe = out[20 * w + 29 + 1] as i64 - bg[20 * w + 30] as i64;
     assert!(fringe > 200, "fringe {fringe}");
     let vf = img.vf();
-    let pp = per_pixel_scatter(&fimg(&img, &vf), &lens(), 0.05);
+    let pp = per_pixel_scatter(&fimg(&img, &vf), &lens(), 0.05, DofKernel::Gaussian);
     let outf: Vec<f64> = out.iter().map(|&v| v as f64).collect();
     eprintln!(
         "blurred foreground over sharp background: fringe +{fringe} LSB one pixel outside; background untouched beyond M = {m}; S vs per-pixel {:.4}",
@@ -443,7 +443,7 @@ fn hard_case_depth_ramp_crossing_every_layer() {
     assert!(plan.layers.len() >= 8, "{} layers", plan.layers.len());
     let vf = img.vf();
     let fi = fimg(&img, &vf);
-    let pp = per_pixel_scatter(&fi, &lens(), p.k);
+    let pp = per_pixel_scatter(&fi, &lens(), p.k, DofKernel::Gaussian);
     let s = difference_degree(&additive_layered(&fi, &plan, p.coef_bits, false), &pp);
     assert!(s < p.p);
     let max_sigma_step = plan

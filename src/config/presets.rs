@@ -2,8 +2,8 @@
 //! 8-bit linear accumulators, and 8- or 7-bit log codes with potentiation or log arithmetic.
 
 use super::{
-    AccumulateCfg, CodingCfg, CyclesCfg, DitherCfg, DofCfg, DofKind, DownsampleCfg, FilterKind,
-    GammaCfg, HwConfig, InputCfg, LuminanceCfg, RasterCfg, SigmaForm, VisibilityCfg,
+    AccumulateCfg, CodingCfg, CyclesCfg, DitherCfg, DofCfg, DofKernel, DofKind, DownsampleCfg,
+    FilterKind, GammaCfg, HwConfig, InputCfg, LuminanceCfg, RasterCfg, SigmaForm, VisibilityCfg,
 };
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
 
@@ -62,6 +62,7 @@ pub fn preset(name: &str) -> Option<HwConfig> {
         dither: DitherCfg::default(),
         dof: DofCfg {
             kind: DofKind::Layered,
+            kernel: DofKernel::Gaussian,
             sigma: SigmaForm::Paper,
             sigma_rom_bits: 10,
             p: 0.1,

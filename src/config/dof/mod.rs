@@ -40,6 +40,40 @@ impl DofKind {
     }
 }
 
+/// The shape of the layered method's mask for a blur radius `sigma` (`dof.kernel`,
+/// docs/dof.md "Kernel shape"); quantised with the equal-energy property either way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DofKernel {
+    /// The paper's separable `exp(-r^2 / sigma^2)` (RMS radius `sigma / sqrt(2)`, wider than
+    /// the lens's disc of radius `sigma`).
+    Gaussian,
+    /// The lens's own uniform disc of radius `|sigma|` (pixel-area weights), a direct 2-D
+    /// filter: `(2M + 1)^2` taps.
+    Disc,
+    /// A separable Gaussian fitted to the disc: `exp(-r^2 / (s sigma)^2)` with the `s` that
+    /// minimises the largest edge-profile difference to the disc.
+    FittedGaussian,
+}
+
+impl DofKernel {
+    /// Every kernel, in the order the docs list them.
+    pub const ALL: [DofKernel; 3] = [
+        DofKernel::Gaussian,
+        DofKernel::Disc,
+        DofKernel::FittedGaussian,
+    ];
+
+    /// The name in a hardware file.
+    pub fn name(self) -> &'static str {
+        match self {
+            DofKernel::Gaussian => "gaussian",
+            DofKernel::Disc => "disc",
+            DofKernel::FittedGaussian => "fitted_gaussian",
+        }
+    }
+}
+
 /// How the blur per depth code is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -86,6 +120,8 @@ pub const DOF_BITS: [(&str, u32, u32); 5] = [
 pub struct DofCfg {
     /// The method.
     pub kind: DofKind,
+    /// The mask shape of the layered method and the downsample method's small blur.
+    pub kernel: DofKernel,
     /// The blur per depth code.
     pub sigma: SigmaForm,
     /// Depth-code bits indexing the sigma ROM (`sigma = "paper"`).
@@ -183,6 +219,12 @@ impl DofCfg {
                 ),
             );
         }
+        if p.kernel == DofKernel::Disc && p.skip_uniform_tiles {
+            return err(
+                "skip_uniform_tiles",
+                "must be false with dof.kernel = \"disc\" (the uniform-tile skip is the separable passes' option; the direct 2-D filter has none)".into(),
+            );
+        }
         p.luminance
             .validate()
             .map_err(|(f, m)| (format!("dof.luminance.{f}"), m))?;
@@ -198,6 +240,7 @@ impl DofCfg {
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDof {
     kind: Option<DofKind>,
+    kernel: Option<DofKernel>,
     sigma: Option<SigmaForm>,
     sigma_rom_bits: Option<u32>,
     p: Option<f64>,
@@ -219,6 +262,7 @@ impl RawDof {
     /// Overrides the given fields.
     pub(crate) fn apply(self, c: &mut DofCfg) {
         set(&mut c.kind, self.kind);
+        set(&mut c.kernel, self.kernel);
         set(&mut c.sigma, self.sigma);
         set(&mut c.sigma_rom_bits, self.sigma_rom_bits);
         set(&mut c.p, self.p);

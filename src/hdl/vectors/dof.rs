@@ -10,7 +10,7 @@
 //! values the module must ignore.
 
 use super::{RANDOM, TAPS, bad};
-use crate::config::{DofKind, HwConfig};
+use crate::config::{DofKernel, DofKind, HwConfig};
 use crate::error::{Error, FileError, Result};
 use crate::hdl::bench::{Bench, Rng};
 use crate::pipeline;
@@ -47,6 +47,13 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
                 "the dof row MAC is the layered method's datapath; dof.kind = \"{}\" has no Verilog model yet (use kind = \"layered\" for the vectors)",
                 p.kind.name()
             ),
+        ));
+    }
+    if p.kernel == DofKernel::Disc {
+        return Err(bad(
+            hw,
+            "dof.kernel",
+            "the dof row MAC is the separable passes' datapath; dof.kernel = \"disc\" is a direct 2-D filter with no Verilog model yet (use kernel = \"gaussian\" or \"fitted_gaussian\" for the vectors)".into(),
         ));
     }
     if p.acc_bits > 64 {

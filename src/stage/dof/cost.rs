@@ -2,7 +2,7 @@
 
 use super::layers::LayerPlan;
 use super::lens::LensMap;
-use crate::config::{DofCfg, SigmaForm};
+use crate::config::{DofCfg, DofKernel, SigmaForm};
 use crate::fixed::{QFormat, SignalStats};
 use crate::stage::{Cost, MemImage, Memory, Unit};
 use std::sync::Arc;
@@ -74,6 +74,9 @@ pub fn cost(
     n2: u32,
     lens: &LensMap,
 ) -> Cost {
+    if p.kernel == DofKernel::Disc {
+        return disc_cost(plan, p, width, height, code_bits, n2).merge(lens_cost(lens));
+    }
     let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0) as u64;
     let a_bits = n2.next_power_of_two().trailing_zeros() + 1;
     let alpha_line = a_bits + p.coef_bits + 1;
@@ -127,6 +130,65 @@ pub fn cost(
     })
 }
 
+/// Cost of the direct 2-D filter of `dof.kernel = "disc"`: `2M` input lines of `x m` and
+/// `m` words (the window's rows above the current one), a multiplier per non-zero weight of
+/// the largest mask for each plane (the weights are symmetric, so a chip could pre-add
+/// mirrored samples; counted here without), their adder trees into `dof.acc`, the
+/// coefficient ROM of one quadrant per layer, the divide and the composite.
+fn disc_cost(
+    plan: &LayerPlan,
+    p: &DofCfg,
+    width: u64,
+    height: u64,
+    code_bits: u32,
+    n2: u32,
+) -> Cost {
+    let m_max = plan.layers.iter().map(|l| l.m).max().unwrap_or(0) as u64;
+    let taps = plan
+        .layers
+        .iter()
+        .filter_map(|l| l.disc.as_ref().map(|d| d.nonzero()))
+        .max()
+        .unwrap_or(1) as u32;
+    let a_bits = n2.next_power_of_two().trailing_zeros() + 1;
+    let xm_bits = code_bits + a_bits;
+    let w_bits = 2 * p.coef_bits + 1;
+    let rom_words: u64 = plan.layers.iter().map(|l| (l.m as u64 + 1).pow(2)).sum();
+    Cost::new(
+        vec![
+            Memory::ram(LINE_BUFFERS, 2 * m_max * width, xm_bits + a_bits),
+            Memory::ram(COMPOSITE, width * height, code_bits + p.guard_bits),
+            Memory::rom(COEF_ROM, rom_words, w_bits),
+        ],
+        vec![
+            Unit::adder("2-D tap sum (intensity)", taps, p.acc_bits),
+            Unit::adder("2-D tap sum (alpha)", taps, w_bits + a_bits),
+            Unit::adder(
+                "composite (over)",
+                1,
+                code_bits + p.guard_bits + p.alpha_bits,
+            ),
+        ],
+        vec![
+            Unit::mul("premultiply x * coverage", 1, code_bits, a_bits),
+            Unit::mul("2-D taps (intensity)", taps, xm_bits, w_bits),
+            Unit::mul("2-D taps (alpha)", taps, a_bits, w_bits),
+            Unit::mul(
+                "layer colour (divide acc / alpha)",
+                1,
+                p.acc_bits + p.guard_bits,
+                w_bits + a_bits,
+            ),
+            Unit::mul(
+                "composite (colour x alpha, back x (1-alpha))",
+                2,
+                code_bits + p.guard_bits,
+                p.alpha_bits + 1,
+            ),
+        ],
+    )
+}
+
 /// Name of the uniform-run line buffer (`dof.skip_uniform_tiles`).
 pub const UNIFORM_RUNS: &str = "dof uniform-run line buffer";
 /// Name of the uniform tile flags (`dof.skip_uniform_tiles`).
@@ -168,7 +230,26 @@ fn uniform_cost(
 
 /// The coefficient ROM's contents: per layer (far to near) the centre tap and the taps on
 /// one side (the masks are symmetric), `coef_bits + 1` bits each.
+/// With `dof.kernel = "disc"`: per layer the quadrant `dx, dy >= 0` of its 2-D mask (row by
+/// row, `(M + 1)^2` words of `2 coef_bits + 1` bits; an identity layer is its one weight).
 pub fn coefficient_image(plan: &LayerPlan, p: &DofCfg) -> MemImage {
+    if p.kernel == DofKernel::Disc {
+        let one = 1u64 << (2 * p.coef_bits);
+        let words: Vec<u64> = plan
+            .layers
+            .iter()
+            .flat_map(|l| match &l.disc {
+                Some(d) => {
+                    let (m, n) = (d.m, d.side());
+                    (m..n)
+                        .flat_map(|y| d.w[y * n + m..(y + 1) * n].to_vec())
+                        .collect::<Vec<_>>()
+                }
+                None => vec![one],
+            })
+            .collect();
+        return MemImage::table(COEF_ROM, 2 * p.coef_bits + 1, Arc::new(words));
+    }
     let words: Vec<u64> = plan
         .layers
         .iter()

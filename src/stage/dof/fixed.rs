@@ -256,6 +256,11 @@ fn exec_with<P: Plane>(
             continue;
         };
         let (bw, bh) = (x1 - x0, y1 - y0);
+        if let Some(mask) = &layer.disc {
+            let boxr = (x0, y0, bw, bh);
+            super::disc::layer_fixed(img, plan, l, mask, boxr, p, &mut out, &mut def, &mut work)?;
+            continue;
+        }
         let c = &layer.coef;
         let wx = border_sums(c, w);
         let wy = border_sums(c, h);

@@ -59,6 +59,10 @@ pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> 
             continue;
         };
         let (bw, bh) = (x1 - x0, y1 - y0);
+        if let Some(mask) = &layer.disc {
+            super::disc::layer_f64(img, plan, l, mask, (x0, y0, bw, bh), &mut out, &mut def);
+            continue;
+        }
         let c = &on_fixed_support(&layer.coef_f, &layer.coef);
         let m = layer.m as i64;
         let wx = border_sums(c, w);

@@ -7,6 +7,7 @@ use super::{
     DepthImage, Exec, LayerPlan, LayerWork, LensMap, STRIP_ROWS, layer_work, layered_f64,
     layered_fixed_exec, overflow_signal, overflow_signal_in, plan_layers,
 };
+use crate::config::DofKernel;
 use crate::error::{Error, Result};
 use crate::stage::accumulate::Frame;
 use crate::stage::{Cost, Cx, Facts, MemImage, TokenKind, Tokens};
@@ -74,7 +75,8 @@ impl Method for Layered {
         layered_f64(&DepthImage::of_frame(frame, value, n2(cx)), plan)
     }
 
-    /// One token per layer: the output samples of both 1-D passes over its box. With
+    /// One token per layer: the output samples of both 1-D passes over its box (of the one
+    /// 2-D pass with `dof.kernel = "disc"`). With
     /// `dof.skip_uniform_tiles` the pixels of skipped tiles produce none, and the detection
     /// scans each blurred layer's box at one pixel per clock: the first layer's scan before
     /// its passes, each next one's alongside the passes of the layer before (a second frame
@@ -93,6 +95,9 @@ impl Method for Layered {
                     own.max(next) + if i == 0 { scan(l) } else { 0 }
                 })
                 .collect()
+        } else if cx.hw.dof.kernel == DofKernel::Disc {
+            // One 2-D pass: one output per box pixel (an identity layer passes its box).
+            layers.iter().map(|l| l.pixels).collect()
         } else {
             layers.iter().map(|l| 2 * l.pixels).collect()
         };

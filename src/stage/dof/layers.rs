@@ -1,8 +1,10 @@
 //! Depth layers (docs/reference.md §3): the depth image, the layer plan grown far to near,
 //! and each layer's bounding box and work for the cycle model.
 
+use super::kernel::{KernelDifferences, Mask2, kernel_half_size, kernel_taps_f64};
 use super::lens::{LensMap, SIGMA_FRAC};
-use super::mask::{MaskDifferences, half_size, taps_f64, taps_fixed};
+use super::mask::taps_fixed;
+use crate::config::DofKernel;
 use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
 use serde::Serialize;
 
@@ -23,12 +25,28 @@ pub struct Layer {
     pub m: usize,
     /// Pixels whose depth falls in the layer.
     pub pixels: u64,
-    /// Quantised 1-D taps (sum `2^coef_bits`).
+    /// Quantised 1-D taps (sum `2^coef_bits`; empty for a 2-D mask).
     #[serde(skip)]
     pub coef: Vec<u64>,
-    /// Float 1-D taps (sum 1).
+    /// Float 1-D taps (sum 1; empty for a 2-D mask).
     #[serde(skip)]
     pub coef_f: Vec<f64>,
+    /// The 2-D mask of a `disc` kernel with `M > 0` (a direct 2-D filter, docs/dof.md
+    /// "Kernel shape"); `None` for the separable kernels and the identity.
+    #[serde(skip)]
+    pub disc: Option<Mask2>,
+}
+
+impl Layer {
+    /// The layer's masks for `sigma`: separable taps, or the disc's 2-D mask.
+    fn masks(kernel: DofKernel, sigma: f64, p: &DofCfg) -> (Vec<u64>, Vec<f64>, Option<Mask2>) {
+        let m = kernel_half_size(kernel, sigma, p.k);
+        if kernel == DofKernel::Disc && m > 0 {
+            return (vec![], vec![], Some(Mask2::disc(sigma, 2 * p.coef_bits)));
+        }
+        let coef_f = kernel_taps_f64(kernel, sigma, p.k);
+        (taps_fixed(&coef_f, p.coef_bits), coef_f, None)
+    }
 }
 
 /// A depth image: values, depth codes (`u32::MAX` = background), coverage of `n2` samples.
@@ -113,7 +131,7 @@ pub fn plan_layers(
         .zip(&sigs)
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
     {
-        let m = half_size(s, p.k);
+        let m = kernel_half_size(p.kernel, s, p.k);
         if m > p.max_half_size as usize {
             let z = lens.z_of(worst);
             let advice = if m <= MAX_HALF_SIZE_LIMIT as usize {
@@ -143,7 +161,7 @@ pub fn plan_layers(
         };
         (zm, sig(c))
     };
-    let mut diffs = MaskDifferences::default();
+    let mut diffs = KernelDifferences::new(p.kernel);
     let mut mask_difference = |a: f64, b: f64, k: f64| diffs.get(a, b, k);
     let mut layers: Vec<Layer> = Vec::new();
     let mut i = 0;
@@ -174,7 +192,7 @@ pub fn plan_layers(
         }
         let near = keys[j];
         let (z_mid, sigma) = mid_sigma(far, near);
-        let m = half_size(sigma, p.k);
+        let m = kernel_half_size(p.kernel, sigma, p.k);
         if m > p.max_half_size as usize {
             return Err(format!(
                 "a layer at screen z {z_mid:.4} needs sigma {:.2} px, a mask half-size M = {m} > dof.max_half_size = {}; raise dof.max_half_size (at most {MAX_HALF_SIZE_LIMIT}) or reduce the lens radius",
@@ -182,8 +200,7 @@ pub fn plan_layers(
                 p.max_half_size
             ));
         }
-        let coef_f = taps_f64(sigma, p.k);
-        let coef = taps_fixed(&coef_f, p.coef_bits);
+        let (coef, coef_f, disc) = Layer::masks(p.kernel, sigma, p);
         layers.push(Layer {
             key_far: far,
             key_near: near,
@@ -194,6 +211,7 @@ pub fn plan_layers(
             pixels: 0,
             coef,
             coef_f,
+            disc,
         });
         i = j + 1;
     }

@@ -82,6 +82,7 @@
 //! spread with its layer's middle mask, summed, no compositing.
 //!
 //! Files: `lens` (blur per depth code, the sigma ROM), `mask` (taps, difference degree),
+//! `kernel` (the mask shape of `dof.kernel`), `disc` (a disc layer's direct 2-D filter),
 //! `method` (the interface of the methods behind `dof.kind`), `layered` (the layered method
 //! through it), `luminance/` (the luminance-aware method), `layers` (the layer plan), `fixed`
 //! (the fixed datapath, `row_mac`), `float` (the layered float reference), `reference`
@@ -89,10 +90,12 @@
 //! frame made linear for DoF), `cost` (cost, memories, signals), `stage` (the stage contract).
 
 mod cost;
+mod disc;
 pub mod downsample;
 mod fast;
 mod fixed;
 mod float;
+mod kernel;
 mod layered;
 mod layers;
 mod lens;
@@ -115,6 +118,7 @@ pub use fixed::{
     layered_fixed_exec, layered_fixed_observed, row_mac,
 };
 pub use float::{layered_f64, layered_f64_exec};
+pub use kernel::{FITTED_SCALE, Mask2, disc_f64, disc_half_size, gaussian_sigma, kernel_half_size};
 pub use layers::{DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layers};
 pub use lens::{G_FRAC, LensMap, SIGMA_FRAC};
 pub use mask::{difference_degree, half_size, mask_difference, taps_f64, taps_fixed};

@@ -1,9 +1,11 @@
 //! Float reference (2) and error measures: the per-pixel scatter filter, the theorem's
 //! additive layered form, the depth-edge band and the errors of an image against a reference.
 
+use super::kernel::{disc_f64, kernel_taps_f64};
 use super::layers::{DepthImage, LayerPlan};
 use super::lens::LensMap;
-use super::mask::{difference_degree, taps_f64};
+use super::mask::difference_degree;
+use crate::config::DofKernel;
 use crate::stage::LocalError;
 use serde::Serialize;
 
@@ -25,19 +27,61 @@ fn scatter(out: &mut [f64], w: usize, h: usize, px: usize, py: usize, v: f64, c:
     }
 }
 
+/// Scatters `v` at `(px, py)` with the 2-D weights `c` (odd square side), restricted to the
+/// image and renormalised.
+fn scatter2(out: &mut [f64], w: usize, h: usize, px: usize, py: usize, v: f64, c: &[f64]) {
+    let n = (c.len() as f64).sqrt().round() as usize;
+    let m = (n / 2) as i64;
+    let (xa, xb) = ((px as i64 - m).max(0), (px as i64 + m).min(w as i64 - 1));
+    let (ya, yb) = ((py as i64 - m).max(0), (py as i64 + m).min(h as i64 - 1));
+    let tap = |x: i64, y: i64| c[(y - py as i64 + m) as usize * n + (x - px as i64 + m) as usize];
+    let mut s = 0.0;
+    for y in ya..=yb {
+        for x in xa..=xb {
+            s += tap(x, y);
+        }
+    }
+    let v = v / s;
+    for y in ya..=yb {
+        let row = &mut out[y as usize * w..];
+        for x in xa..=xb {
+            row[x as usize] += v * tap(x, y);
+        }
+    }
+}
+
+/// A pixel's own mask: separable taps, or the disc's 2-D weights.
+enum Own {
+    Taps(Vec<f64>),
+    Disc(Vec<f64>),
+}
+
 /// Float reference (2): the per-pixel scatter filter. Every pixel spreads its value with the
-/// mask of its own depth (`sigma` = exact float sigma of its depth code), energy preserving.
-pub fn per_pixel_scatter(img: &DepthImage<f64>, lens: &LensMap, k: f64) -> Vec<f64> {
+/// `dof.kernel` mask of its own depth (`sigma` = exact float sigma of its depth code), energy
+/// preserving.
+pub fn per_pixel_scatter(
+    img: &DepthImage<f64>,
+    lens: &LensMap,
+    k: f64,
+    kernel: DofKernel,
+) -> Vec<f64> {
     let (w, h) = (img.width, img.height);
     let mut out = vec![0.0; w * h];
-    let mut cache: std::collections::HashMap<u32, Vec<f64>> = Default::default();
+    let mut cache: std::collections::HashMap<u32, Own> = Default::default();
     for y in 0..h {
         for x in 0..w {
             let pi = y * w + x;
-            let c = cache
-                .entry(img.key[pi])
-                .or_insert_with(|| taps_f64(lens.sigma_f64(img.key[pi]), k));
-            scatter(&mut out, w, h, x, y, img.value[pi], c);
+            let own = cache.entry(img.key[pi]).or_insert_with(|| {
+                let s = lens.sigma_f64(img.key[pi]);
+                match kernel {
+                    DofKernel::Disc => Own::Disc(disc_f64(s)),
+                    _ => Own::Taps(kernel_taps_f64(kernel, s, k)),
+                }
+            });
+            match own {
+                Own::Taps(c) => scatter(&mut out, w, h, x, y, img.value[pi], c),
+                Own::Disc(c) => scatter2(&mut out, w, h, x, y, img.value[pi], c),
+            }
         }
     }
     out
@@ -52,33 +96,34 @@ pub fn additive_layered(
     quantised: bool,
 ) -> Vec<f64> {
     let (w, h) = (img.width, img.height);
-    let taps: Vec<Vec<f64>> = plan
+    let taps: Vec<Own> = plan
         .layers
         .iter()
-        .map(|l| {
-            if quantised {
+        .map(|l| match (&l.disc, quantised) {
+            (Some(d), true) => Own::Disc(
+                d.w.iter()
+                    .map(|&c| c as f64 / (1u64 << (2 * coef_bits)) as f64)
+                    .collect(),
+            ),
+            (Some(d), false) => Own::Disc(d.wf.clone()),
+            (None, true) => Own::Taps(
                 l.coef
                     .iter()
                     .map(|&c| c as f64 / (1u64 << coef_bits) as f64)
-                    .collect()
-            } else {
-                l.coef_f.clone()
-            }
+                    .collect(),
+            ),
+            (None, false) => Own::Taps(l.coef_f.clone()),
         })
         .collect();
     let mut out = vec![0.0; w * h];
     for y in 0..h {
         for x in 0..w {
             let pi = y * w + x;
-            scatter(
-                &mut out,
-                w,
-                h,
-                x,
-                y,
-                img.value[pi],
-                &taps[plan.index[pi] as usize],
-            );
+            let v = img.value[pi];
+            match &taps[plan.index[pi] as usize] {
+                Own::Taps(c) => scatter(&mut out, w, h, x, y, v, c),
+                Own::Disc(c) => scatter2(&mut out, w, h, x, y, v, c),
+            }
         }
     }
     out

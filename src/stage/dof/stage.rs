@@ -286,7 +286,7 @@ fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
     let outf: Vec<f64> = out.iter().map(|&v| v as f64).collect();
     let white = cx.hw.accumulate.frame.format.max_code() as f64;
     let t = std::time::Instant::now();
-    let pp = per_pixel_scatter(&fimg, &b.lens, p.k);
+    let pp = per_pixel_scatter(&fimg, &b.lens, p.k, p.kernel);
     let pp_ms = crate::stage::ms_since(t);
     let v = |x: &RegionError| serde_json::to_value(x).unwrap_or_default();
     let mut notes = serde_json::json!({

@@ -16,7 +16,7 @@ pub struct DownWork {
     /// Multiply-accumulates: both Gaussian passes, the bilinear samples, the tap mixes and
     /// the weighted sums.
     pub macs: u64,
-    /// Taps gathered (inside the image, weight > 0).
+    /// Taps gathered (weight > 0; a tap off the frame reads its edge pixel).
     pub taps: u64,
     /// Normaliser divides.
     pub divides: u64,
@@ -242,11 +242,17 @@ pub fn downsample_fixed(
             }
             let (mut num, mut den) = (0u128, 0u128);
             for &(dx, dy) in offs {
+                // A tap off the frame reads its edge pixel (clamp-to-edge): dropping it
+                // would skew the remaining taps and band the border (docs/dof-downsample.md).
                 let (px, py) = (cx + rc * dx, cy + rc * dy);
-                let (ix, iy) = (px >> pf, py >> pf);
-                if ix < 0 || iy < 0 || ix >= w as i64 || iy >= h as i64 {
-                    continue;
-                }
+                let (ix, iy) = (
+                    (px >> pf).clamp(0, w as i64 - 1),
+                    (py >> pf).clamp(0, h as i64 - 1),
+                );
+                let (px, py) = (
+                    px.clamp(0, ((w as i64) << pf) - 1),
+                    py.clamp(0, ((h as i64) << pf) - 1),
+                );
                 let j = iy as usize * w + ix as usize;
                 let wt = tap_weight(d.leak_guard, kc, bc, key[j], beta[j], one);
                 if wt == 0 {

@@ -1,5 +1,6 @@
 //! The float reference of the downsample method: the same steps in f64 with the exact
-//! blend factors `|sigma| / sigma_max`, the exact CoC radii `|sigma|`, the exact Poisson
+//! blend factors `|sigma| / scale`, the exact CoC radii `|sigma|` (0 and no blend where the
+//! fixed path passes a pixel through), the exact Poisson
 //! offsets, float Gaussian taps, exact bilinear weights and an exact normaliser divide.
 
 use super::fixed::tap_weight_f64;
@@ -51,8 +52,25 @@ pub fn downsample_f64(
         blurred[i] = s;
         Ok(())
     });
-    let beta: Vec<f64> = key.iter().map(|&k| plan.blend_f64(blur, k)).collect();
-    let radius: Vec<f64> = key.iter().map(|&k| blur.sigma_f64(k).abs()).collect();
+    // The fixed path's decisions: no blend where its factor is 0, no gather where its
+    // radius is 0 (a pass-through pixel).
+    let fixed: Vec<u64> = key.iter().map(|&k| plan.blend_fixed(k, p.quant)).collect();
+    let beta: Vec<f64> = key
+        .iter()
+        .zip(&fixed)
+        .map(|(&k, &b)| plan.blend_f64(blur, k, b))
+        .collect();
+    let radius: Vec<f64> = key
+        .iter()
+        .zip(&fixed)
+        .map(|(&k, &b)| {
+            if plan.radius_fixed(b) == 0 {
+                0.0
+            } else {
+                blur.sigma_f64(k).abs()
+            }
+        })
+        .collect();
     let guard = p.downsample.leak_guard;
     let mut out = vec![0.0; w * h];
     for y in 0..h {
@@ -62,11 +80,14 @@ pub fn downsample_f64(
             let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
             let (mut num, mut den) = (0.0, 0.0);
             for &(dx, dy) in &plan.taps.points {
+                // Clamp-to-edge, as the fixed path: the position moves to the frame's
+                // last representable point, the pixel to its edge pixel.
                 let (px, py) = (cx + rc * dx, cy + rc * dy);
-                let (ix, iy) = (px.floor(), py.floor());
-                if ix < 0.0 || iy < 0.0 || ix >= w as f64 || iy >= h as f64 {
-                    continue;
-                }
+                let (ix, iy) = (
+                    px.floor().clamp(0.0, w as f64 - 1.0),
+                    py.floor().clamp(0.0, h as f64 - 1.0),
+                );
+                let (px, py) = (px.clamp(0.0, w as f64), py.clamp(0.0, h as f64));
                 let j = iy as usize * w + ix as usize;
                 let wt = tap_weight_f64(guard, kc, bc, key[j], beta[j]);
                 if wt == 0.0 {

@@ -95,6 +95,8 @@ impl Method for Downsample {
                 "small_image": [plan.small_width, plan.small_height],
                 "sigma_max_px": plan.sigma_max,
                 "sigma_max_code_px": plan.sigma_max_code as f64 / (1u64 << super::SIGMA_FRAC) as f64,
+                "scale_px": plan.scale,
+                "scale_code_px": plan.scale_code as f64 / (1u64 << super::SIGMA_FRAC) as f64,
                 "small_sigma": plan.small_sigma,
                 "small_half_size": plan.m,
                 "reach_px": plan.reach,

@@ -2,9 +2,9 @@
 //! image's Gaussian, the blend ROM, the Poisson taps and the blend window's reach.
 
 use super::poisson::Poisson;
-use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
+use crate::config::{DofCfg, DofKernel, MAX_HALF_SIZE_LIMIT};
 use crate::fixed::{Quant, round_shift};
-use crate::stage::dof::{LensMap, SIGMA_FRAC, half_size, taps_f64, taps_fixed};
+use crate::stage::dof::{LensMap, SIGMA_FRAC, gaussian_sigma, half_size, taps_f64, taps_fixed};
 use serde::Serialize;
 
 /// The blur of a depth code as the method reads it (implemented by [`LensMap`]; tests may
@@ -55,7 +55,15 @@ pub struct DownPlan {
     pub sigma_max_code: i64,
     /// Exact largest `|sigma|` over the frame (pixels), for the float reference.
     pub sigma_max: f64,
-    /// Sigma of the small image's Gaussian in small pixels: `sigma_max_code 2^-8 / factor`.
+    /// The blur the blurred copy stands for and the blend factors' scale (pixels, a
+    /// [`SIGMA_FRAC`] code): `max(sigma_max_code, `[`blend_floor`]`)`, an absolute scale, so
+    /// a frame's small blurs blend in little of the copy however small its largest blur is.
+    pub scale_code: i64,
+    /// The same from the exact `sigma_max` (the float reference's).
+    pub scale: f64,
+    /// Sigma of the small image's Gaussian in small pixels: the Gaussian that brings the
+    /// copy's inherent blur (the box average and the bilinear read) up to `scale_code`
+    /// ([`small_sigma_px`]), divided by `factor`.
     pub small_sigma: f64,
     /// The same from the exact `sigma_max` (the float reference's).
     pub small_sigma_f64: f64,
@@ -73,7 +81,7 @@ pub struct DownPlan {
     /// `z_frac - rom_bits`: the depth bits interpolated between two entries.
     pub rom_shift: u32,
     /// Blend ROM: `2^rom_bits + 1` entries at depth codes `i 2^rom_shift`, then infinity;
-    /// `UQ1.<blend_bits>`, `min(round(|sigma| / sigma_max 2^b), 2^b)`.
+    /// `UQ1.<blend_bits>`, `min(round(|sigma| / scale 2^b), 2^b)`.
     #[serde(skip)]
     pub blend_rom: Vec<u64>,
     /// Depth codes at or above this are clamped to it before the ROM lookup (the largest
@@ -92,12 +100,12 @@ pub struct DownPlan {
 
 impl DownPlan {
     /// The blend ROM entry for an exact `|sigma|` (pixels), `blend_bits` fraction bits.
-    pub fn rom_entry(sigma_abs: f64, sigma_max_code: i64, blend_bits: u32) -> u64 {
-        if sigma_max_code <= 0 {
+    pub fn rom_entry(sigma_abs: f64, scale_code: i64, blend_bits: u32) -> u64 {
+        if scale_code <= 0 {
             return 0;
         }
         let one = 1u64 << blend_bits;
-        let smax = sigma_max_code as f64 / (1u64 << SIGMA_FRAC) as f64;
+        let smax = scale_code as f64 / (1u64 << SIGMA_FRAC) as f64;
         // RND_INF of a non-negative value is f64::round.
         ((sigma_abs / smax * one as f64).round() as u64).min(one)
     }
@@ -123,22 +131,47 @@ impl DownPlan {
         (a + round_shift((b - a) * lo as i128, self.rom_shift, quant)) as u64
     }
 
-    /// The exact blend factor of a depth code: `|sigma| / sigma_max` (0 when nothing blurs).
+    /// The exact blend factor of a depth code: `|sigma| / scale`, 0 where the fixed
+    /// factor `fixed` is 0: the reference makes the fixed path's decision to pass a pixel
+    /// through (an in-focus pixel's exact sigma may be 1e-6 px where its code is 0; the
+    /// reference must not blur what the method keeps sharp, docs/dof-downsample.md).
     #[inline]
-    pub fn blend_f64(&self, blur: &dyn Blur, key: u32) -> f64 {
-        if self.sigma_max > 0.0 {
-            (blur.sigma_f64(key).abs() / self.sigma_max).min(1.0)
+    pub fn blend_f64(&self, blur: &dyn Blur, key: u32, fixed: u64) -> f64 {
+        if self.scale > 0.0 && fixed > 0 {
+            (blur.sigma_f64(key).abs() / self.scale).min(1.0)
         } else {
             0.0
         }
     }
 
-    /// The CoC radius of a blend factor, fixed: `beta sigma_max_code`, exact (pixels with
+    /// The CoC radius of a blend factor, fixed: `beta scale_code`, exact (pixels with
     /// [`SIGMA_FRAC`]` + blend_bits` fraction bits, unsigned).
     #[inline]
     pub fn radius_fixed(&self, beta: u64) -> i64 {
-        beta as i64 * self.sigma_max_code
+        beta as i64 * self.scale_code
     }
+}
+
+/// The blurred copy's inherent blur as a Gaussian `exp(-x^2 / s^2)`: the `f x f` box
+/// average (variance `f^2 / 12`) and the bilinear read (a tent of half-width `f`, variance
+/// `f^2 / 6`) give a standard deviation `f / 2`, i.e. `s = f / sqrt 2` px.
+pub fn inherent_blur(factor: usize) -> f64 {
+    factor as f64 / std::f64::consts::SQRT_2
+}
+
+/// The smallest blur the copy can stand for (pixels of `sigma`): the inherent blur, as the
+/// blur radius whose kernel's Gaussian it is (`fitted_gaussian` and `disc` read `sigma` as a
+/// disc radius whose fitted Gaussian is `FITTED_SCALE sigma`).
+pub fn blend_floor(factor: usize, kernel: DofKernel) -> f64 {
+    inherent_blur(factor) / gaussian_sigma(kernel, 1.0)
+}
+
+/// The Gaussian (full-resolution pixels, `exp(-x^2 / s^2)`) the copy's small blur adds so
+/// that the copy's total blur is the kernel's Gaussian of blur radius `scale`: variances add,
+/// `s^2 = g(scale)^2 - f^2 / 2` (0 at the floor).
+pub fn small_sigma_px(scale: f64, factor: usize, kernel: DofKernel) -> f64 {
+    let t = gaussian_sigma(kernel, scale);
+    (t * t - inherent_blur(factor).powi(2)).max(0.0).sqrt()
 }
 
 /// Plans the method for a frame of depth codes `key` (`width x height`): the largest
@@ -161,9 +194,13 @@ pub fn plan_downsample(
         smax = smax.max(blur.sigma_f64(k).abs());
     }
     let factor = d.factor as usize;
-    let sigma_fixed = smax_code as f64 / (1u64 << SIGMA_FRAC) as f64;
-    let small_sigma = sigma_fixed / factor as f64;
-    let small_sigma_f64 = smax / factor as f64;
+    let one = (1u64 << SIGMA_FRAC) as f64;
+    let floor = blend_floor(factor, p.kernel);
+    let scale_code = smax_code.max((floor * one).round() as i64);
+    let scale = smax.max(floor);
+    let sigma_fixed = smax_code as f64 / one;
+    let small_sigma = small_sigma_px(scale_code as f64 / one, factor, p.kernel) / factor as f64;
+    let small_sigma_f64 = small_sigma_px(scale, factor, p.kernel) / factor as f64;
     let m = half_size(small_sigma, p.k).max(half_size(small_sigma_f64, p.k));
     let reach = (sigma_fixed.max(smax) + 0.5).floor() as usize;
     let worst = m.max(reach);
@@ -193,6 +230,8 @@ pub fn plan_downsample(
         small_height: height.div_ceil(factor),
         sigma_max_code: smax_code,
         sigma_max: smax,
+        scale_code,
+        scale,
         small_sigma,
         small_sigma_f64,
         m: coef.len() / 2,
@@ -210,7 +249,7 @@ pub fn plan_downsample(
         reach,
         blurred: Default::default(),
     };
-    let entry = |k: u32| DownPlan::rom_entry(blur.sigma_f64(k).abs(), smax_code, d.blend_bits);
+    let entry = |k: u32| DownPlan::rom_entry(blur.sigma_f64(k).abs(), scale_code, d.blend_bits);
     let mut rom: Vec<u64> = (0..=(1usize << rom_bits))
         .map(|i| entry(plan.rom_key(i)))
         .collect();
