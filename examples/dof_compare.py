@@ -20,13 +20,18 @@ import sys
 import tempfile
 
 SCENES = ["default", "cone-focus", "examples/depth-ramp.toml"]
-KINDS = ["layered", "luminance", "downsample"]
+# (dof.kind, dof.kernel): the layered method with each kernel, the downsample method with
+# the paper's Gaussian and the disc-fitted copy (the luminance method has no kernel).
+KINDS = [("layered", "gaussian"), ("layered", "disc"), ("layered", "fitted_gaussian"),
+         ("luminance", "gaussian"), ("downsample", "gaussian"),
+         ("downsample", "fitted_gaussian")]
 
 
 def render(igemu, scene, kind, n, tmp):
-    hw = os.path.join(tmp, f"{kind}.toml")
+    kind, kernel = kind
+    hw = os.path.join(tmp, f"{kind}-{kernel}.toml")
     with open(hw, "w") as f:
-        f.write(f'[dof]\nkind = "{kind}"\n')
+        f.write(f'[dof]\nkind = "{kind}"\nkernel = "{kernel}"\n')
     out = os.path.join(tmp, "out.png")
     cmd = [igemu, "render", scene, "--hw", hw, "--dof-truth", "--lens-samples", str(n),
            "--json", "-o", out]
@@ -43,7 +48,8 @@ def row(scene, kind, r):
     rms = lambda split: "{:.2f} / {:.2f} / {:.2f}".format(
         split["whole"]["rms"], split["edge"]["rms"], split["interior"]["rms"])
     return "| {} | {} | {} | {} | {} | {:.3f} | {:.1f} M | {} | {} / {} | {:.0f} / {:.0f} |".format(
-        os.path.basename(scene).removesuffix(".toml"), kind,
+        os.path.basename(scene).removesuffix(".toml"),
+        kind[0] if kind[0] == "luminance" else f"{kind[0]} / {kind[1]}",
         rms(t["algorithm"]), rms(t["quantisation"]), rms(t["total"]),
         t["noise"]["dac"]["whole"]["rms"],
         dof["work"].get("macs", 0) / 1e6,
@@ -57,7 +63,7 @@ def main():
     a.add_argument("--igemu", default="target/release/igemu")
     a.add_argument("--lens-samples", type=int, default=256)
     args = a.parse_args()
-    print("| scene | dof.kind | algorithm RMS (whole / edge / interior) | quantisation RMS | "
+    print("| scene | dof.kind / kernel | algorithm RMS (whole / edge / interior) | quantisation RMS | "
           "total RMS | truth noise RMS | MACs | RAM + ROM bits | frame / dof busy cycles | "
           "dof fixed / float ms |")
     print("|---|---|---|---|---|---|---|---|---|---|")

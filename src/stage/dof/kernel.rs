@@ -12,12 +12,14 @@ use std::collections::HashMap;
 /// the step at 0.743 (the paper's Gaussian, 1.0, differs by 8 %; docs/dof.md).
 pub const FITTED_SCALE: f64 = 0.743;
 
-/// The sigma of a separable kernel's Gaussian for blur radius `sigma` (the disc's radius
-/// itself for `disc`).
+/// The sigma of the Gaussian that stands for a kernel of blur radius `sigma`: itself for
+/// `gaussian`, the fitted `FITTED_SCALE sigma` for `fitted_gaussian` and `disc` (the
+/// downsample method's separable copy with `disc`; the layered method filters the disc
+/// itself).
 pub fn gaussian_sigma(kernel: DofKernel, sigma: f64) -> f64 {
     match kernel {
-        DofKernel::FittedGaussian => FITTED_SCALE * sigma,
-        DofKernel::Gaussian | DofKernel::Disc => sigma,
+        DofKernel::FittedGaussian | DofKernel::Disc => FITTED_SCALE * sigma,
+        DofKernel::Gaussian => sigma,
     }
 }
 
