@@ -10,6 +10,47 @@ use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+/// Why `dest` cannot be an output file (a phrase after the path: `is a folder; ...`), found
+/// without writing anything: it names no file
+/// (empty, `.`, `..`, or ending in `/`), it is a folder, or it is a read-only file.
+/// [`AtomicFile::create`] refuses these; the command line checks every output with it
+/// before any work, so a bad path is refused before the first file is written.
+pub fn unwritable(dest: &Path) -> Option<&'static str> {
+    if dest.file_name().is_none() || dest.as_os_str().to_string_lossy().ends_with('/') {
+        return Some("is not a file name; name a file");
+    }
+    let m = std::fs::metadata(dest).ok()?;
+    if m.is_dir() {
+        Some("is a folder; name a file in it")
+    } else if m.permissions().readonly() {
+        Some("is read-only; make it writable or choose another path")
+    } else {
+        None
+    }
+}
+
+/// Why `dir` cannot be an output folder (a phrase after the path; created with its missing parents when written),
+/// found without writing anything: it is empty (`.` names the current folder), or it or
+/// one of its parents is a file.
+pub fn unwritable_folder(dir: &Path) -> Option<String> {
+    if dir.as_os_str().is_empty() {
+        return Some("is not a file name; name a folder (`.` is the current one)".into());
+    }
+    let existing = dir
+        .ancestors()
+        .find(|a| !a.as_os_str().is_empty() && std::fs::symlink_metadata(a).is_ok())?;
+    if existing.is_dir() {
+        None
+    } else if existing == dir {
+        Some("is a file, not a folder; name a folder (it is created if missing)".into())
+    } else {
+        Some(format!(
+            "is inside {}, which is a file, not a folder; name a folder (it is created if missing)",
+            existing.display()
+        ))
+    }
+}
+
 /// An output file being written: the bytes go to a temporary file `.<name>.<pid>.<n>.tmp`
 /// in the destination's folder; [`AtomicFile::commit`] flushes and syncs it and renames it
 /// over the destination. Dropped without a commit (an error, a panic), the temporary is
@@ -35,20 +76,15 @@ impl AtomicFile {
     pub fn create(dest: impl AsRef<Path>) -> Result<AtomicFile> {
         static SERIAL: AtomicU64 = AtomicU64::new(0);
         let dest = dest.as_ref();
-        let bad = |msg: &str| out_error(dest, "cannot write".into(), &io::Error::other(msg));
-        let name = match dest.file_name() {
-            Some(n) if !dest.as_os_str().to_string_lossy().ends_with('/') => n,
-            _ => return Err(bad("not a file name; name a file")),
-        };
-        let existing = std::fs::metadata(dest).ok();
-        if let Some(m) = &existing {
-            if m.is_dir() {
-                return Err(bad("is a folder; name a file in it"));
-            }
-            if m.permissions().readonly() {
-                return Err(bad("is read-only; make it writable or choose another path"));
-            }
+        if let Some(why) = unwritable(dest) {
+            return Err(out_error(
+                dest,
+                "cannot write".into(),
+                &io::Error::other(why),
+            ));
         }
+        let name = dest.file_name().expect("checked by unwritable");
+        let existing = std::fs::metadata(dest).ok();
         let dir = match dest.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),

@@ -1,7 +1,8 @@
 //! Safe outputs: every file is written to a temporary in its folder and renamed (a killed
 //! render never leaves a truncated PNG; a failed write leaves no temporary), an output that
-//! is an input is refused, two outputs on one path are refused, and a closed stdout ends the
-//! program quietly.
+//! is an input is refused, two outputs on one path are refused, a path that cannot be an
+//! output (empty, a folder, a file as `--rom-out`) is refused before any work, and a closed
+//! stdout ends the program quietly.
 
 mod common;
 
@@ -399,6 +400,94 @@ fn two_outputs_on_one_path_are_refused() {
         );
         assert!(names(&d).is_empty(), "{args:?}: refused before any work");
     }
+}
+
+/// Runs `igemu render --no-local ARGS` in the folder `d`: (exit code, stderr).
+fn render_in(d: &Path, args: &[&str]) -> (i32, String) {
+    let out = Command::new(BIN)
+        .current_dir(d)
+        .args(["render", "--no-local"])
+        .args(args)
+        .output()
+        .unwrap();
+    let code = out.status.code().unwrap_or(-1);
+    (code, String::from_utf8_lossy(&out.stderr).into())
+}
+
+/// An output path that cannot be written is refused before any work, naming the flag: an
+/// empty path (the empty `--rom-out` wrote its hex files and manifest.json into the current
+/// folder and exited 0), a folder given as a file, a file or a path inside a file given as
+/// `--rom-out` (a raw "File exists (os error 17)" after o.png was written), and `--rom-out`
+/// on another output's path or holding one (o.png written, then the error).
+#[test]
+fn unwritable_output_paths_and_rom_out_clashes_are_refused_before_any_work() {
+    let d = dir("paths");
+    std::fs::write(d.join("f.txt"), "keep").unwrap();
+    std::fs::create_dir(d.join("roms")).unwrap();
+    let before = names(&d);
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["-o", "o.png", "--rom-out", ""],
+            "--rom-out: '' is not a file name; name a folder",
+        ),
+        (&["-o", ""], "--out: '' is not a file name; name a file"),
+        (
+            &["-o", "o.png", "--report", ""],
+            "--report: '' is not a file name",
+        ),
+        (
+            &["-o", "o.png", "--html", ""],
+            "--html: '' is not a file name",
+        ),
+        (
+            &["-o", "o.png", "--diff-out", "x/"],
+            "--diff-out: x/ is not a file name",
+        ),
+        (
+            &["-o", "o.png", "--report", "roms"],
+            "--report: roms is a folder",
+        ),
+        (
+            &["-o", "o.png", "--rom-out", "f.txt"],
+            "--rom-out: f.txt is a file, not a folder",
+        ),
+        (
+            &["-o", "o.png", "--rom-out", "f.txt/roms"],
+            "--rom-out: f.txt/roms is inside f.txt, which is a file",
+        ),
+        (
+            &["-o", "o.png", "--rom-out", "o.png"],
+            "--rom-out: o.png is also the output of --out",
+        ),
+        (
+            &[
+                "-o",
+                "o.png",
+                "--rom-out",
+                "roms",
+                "--report",
+                "roms/manifest.json",
+            ],
+            "--rom-out: roms/manifest.json is also the output of --report",
+        ),
+        (
+            // A hex file's name is known once the plan has run, still before any write.
+            &["-o", "roms/gamma.gamma_rom.hex", "--rom-out", "roms"],
+            "--rom-out: roms/gamma.gamma_rom.hex is also the output of --out",
+        ),
+    ];
+    for (args, msg) in cases {
+        let (code, err) = render_in(&d, args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(msg), "{args:?}: {err}");
+        assert_eq!(names(&d), before, "{args:?}: nothing written");
+        assert_eq!(names(&d.join("roms")), Vec::<String>::new(), "{args:?}");
+    }
+    assert_eq!(std::fs::read_to_string(d.join("f.txt")).unwrap(), "keep");
+    // The same folder is fine as `--rom-out`, and `.` is the current one.
+    let (code, err) = render_in(&d, &["-o", "o.png", "--rom-out", "."]);
+    assert_eq!(code, 0, "{err}");
+    assert!(d.join("manifest.json").exists() && d.join("o.png").exists());
 }
 
 /// Runs the binary with its stdout on a pipe whose reader is already closed: (exit code,

@@ -116,8 +116,12 @@ fn written(cost: &Cost, im: &MemImage) -> bool {
 }
 
 /// Writes the images of every stage (`(stage, its cost, its images)`) into `dir` (created
-/// if needed) and `dir/manifest.json`; returns the manifest.
+/// if needed; an empty path or a file is refused, see [`crate::output::unwritable_folder`])
+/// and `dir/manifest.json`; returns the manifest.
 pub fn write(dir: &Path, stages: &[(StageId, &Cost, &[MemImage])]) -> Result<Manifest> {
+    if let Some(why) = crate::output::unwritable_folder(dir) {
+        return Err(io(dir)(std::io::Error::other(why)));
+    }
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     let mut m = Manifest::default();
     for &(stage, cost, images) in stages {

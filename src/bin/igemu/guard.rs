@@ -1,4 +1,6 @@
-//! An output never overwrites an input: each command collects its input files (scene
+//! An output never overwrites an input, and every output path is checked before any work:
+//! a path that names no file, a folder given as a file and a file given as a folder are
+//! refused naming the flag. Each command collects its input files (scene
 //! files, the `--hw` file, the `--grid` file) by canonical path and checks every output
 //! path against them before any work. An output that does not exist yet cannot be an
 //! input; a symbolic link or a `..` path to an input is the input. Two outputs of one
@@ -31,8 +33,12 @@ impl Inputs {
         }
     }
 
-    /// Refuses `out` (the value of `flag`) when it is one of the inputs.
+    /// Refuses `out` (the value of `flag`) when it cannot be written as a file (no file
+    /// name, a folder, read-only: [`igemu::output::unwritable`]) or is one of the inputs.
     pub fn check(&self, flag: &str, out: &str) -> Result<(), Error> {
+        if let Some(why) = igemu::output::unwritable(Path::new(out)) {
+            return Err(arg_error(flag, format!("{} {why}", shown(out))));
+        }
         self.check_path(flag, out, Path::new(out))
     }
 
@@ -76,6 +82,20 @@ impl Inputs {
             )),
             None => Ok(()),
         }
+    }
+}
+
+/// A path as messages show it: `''` for the empty one.
+fn shown(p: &str) -> &str {
+    if p.is_empty() { "''" } else { p }
+}
+
+/// Refuses `dir` (the value of `flag`, an output folder created when missing) when it cannot
+/// be one: empty, or it or a parent is a file ([`igemu::output::unwritable_folder`]).
+pub fn folder(flag: &str, dir: &str) -> Result<(), Error> {
+    match igemu::output::unwritable_folder(Path::new(dir)) {
+        Some(why) => Err(arg_error(flag, format!("{} {why}", shown(dir)))),
+        None => Ok(()),
     }
 }
 

@@ -61,6 +61,7 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
         ));
     }
     let inputs = Inputs::of(&a.s);
+    crate::guard::folder("--out", &a.out)?;
     let dir = Path::new(&a.out);
     inputs.check_in("--out", dir, ["params.vh", "vectors.hex"])?;
     let b = hdl::vectors(a.stage.0, &scene, &hw)?;

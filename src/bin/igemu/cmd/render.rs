@@ -1,10 +1,11 @@
 //! `igemu render`: render a scene through the fixed-point pipeline and the float
 //! reference; write the image, the optional reference, difference, banding and stage dumps,
 //! and the report (text, JSON on stdout or a JSON file). Every file is written atomically
-//! ([`igemu::output::AtomicFile`]); no output may be an input.
+//! ([`igemu::output::AtomicFile`]); every output path is checked before the render (no
+//! output may be an input or share a path with another).
 
 use crate::args::{DumpTap, SceneArgs, TruthArgs, arg_error, parse_dump};
-use crate::guard::{Inputs, distinct_outputs};
+use crate::guard::{self, Inputs, distinct_outputs};
 use crate::out::outln;
 use crate::print::print_report;
 use clap::Args;
@@ -61,26 +62,8 @@ pub struct RenderArgs {
 /// Runs `igemu render`; returns the exit code.
 pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
     let inputs = Inputs::of(&a.s);
-    let mut outs = vec![("--out", a.out.as_str())];
-    for (flag, p) in [
-        ("--reference-out", &a.reference_out),
-        ("--diff-out", &a.diff_out),
-        ("--banding-out", &a.banding_out),
-        ("--truth-out", &a.truth_out),
-        ("--report", &a.report),
-        ("--html", &a.html),
-    ] {
-        outs.extend(p.as_deref().map(|p| (flag, p)));
-    }
-    outs.extend(a.dump.iter().map(|(_, p)| ("--dump", p.as_str())));
-    for (flag, p) in &outs {
-        inputs.check(flag, p)?;
-    }
-    distinct_outputs(&outs)?;
+    check_outputs(&a, &inputs, &[igemu::cost::rom::MANIFEST.into()])?;
     let rom_dir = a.rom_out.as_deref().map(std::path::Path::new);
-    if let Some(dir) = rom_dir {
-        inputs.check_in("--rom-out", dir, [igemu::cost::rom::MANIFEST])?;
-    }
     let scene = a.s.scene()?;
     if a.truth_out.is_some() && matches!(scene.camera.lens, igemu::scene::Lens::Pinhole) {
         return Err(arg_error(
@@ -108,9 +91,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         .iter()
         .map(|s| (s.id, &s.outcome.report.cost, s.outcome.images.as_slice()))
         .collect();
-    if let Some(dir) = rom_dir {
+    if rom_dir.is_some() {
         // The hex files' names are known once the plan has run: checked before any write.
-        inputs.check_in("--rom-out", dir, igemu::cost::rom::files(&stages))?;
+        check_outputs(&a, &inputs, &igemu::cost::rom::files(&stages))?;
     }
     output::write_dac(&a.out, &r.dac, w, h, r.dac_bits)?;
     if let Some(p) = &a.reference_out {
@@ -163,4 +146,38 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         print_report(&r.report, &a.out)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Refuses, before any write, an output path that cannot be written or is an input, a
+/// `--rom-out` that is no folder, and two outputs on one path: the files, the `--rom-out`
+/// folder and the files `rom_files` in it.
+fn check_outputs(a: &RenderArgs, inputs: &Inputs, rom_files: &[String]) -> Result<(), Error> {
+    let mut outs = vec![("--out", a.out.clone())];
+    for (flag, p) in [
+        ("--reference-out", &a.reference_out),
+        ("--diff-out", &a.diff_out),
+        ("--banding-out", &a.banding_out),
+        ("--truth-out", &a.truth_out),
+        ("--report", &a.report),
+        ("--html", &a.html),
+    ] {
+        outs.extend(p.clone().map(|p| (flag, p)));
+    }
+    outs.extend(a.dump.iter().map(|(_, p)| ("--dump", p.clone())));
+    for (flag, p) in &outs {
+        inputs.check(flag, p)?;
+    }
+    if let Some(dir) = &a.rom_out {
+        guard::folder("--rom-out", dir)?;
+        let d = std::path::Path::new(dir);
+        inputs.check_in("--rom-out", d, rom_files)?;
+        outs.push(("--rom-out", dir.clone()));
+        outs.extend(
+            rom_files
+                .iter()
+                .map(|n| ("--rom-out", d.join(n).display().to_string())),
+        );
+    }
+    let outs: Vec<(&str, &str)> = outs.iter().map(|(f, p)| (*f, p.as_str())).collect();
+    distinct_outputs(&outs)
 }
