@@ -1318,3 +1318,55 @@ fn files_cut_anywhere_name_a_field_and_a_line() {
         assert!(refused > base.len() / 2, "{refused}");
     }
 }
+
+/// A negative number given to a count or a size is refused naming the option and its range
+/// (clap read `-8` as a flag: "unexpected argument '-8' found"), before any work.
+#[test]
+fn negative_numbers_name_the_option_and_its_range() {
+    let dir = std::env::temp_dir().join(format!("igemu-negative-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("o.png");
+    let o = out.to_str().unwrap();
+    let grid = "examples/grid.toml";
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["render", "--dof-truth", "--lens-samples", "-8", "-o", o],
+            "'--lens-samples <N>': must be a multiple of 8 (the noise estimate's interleaved groups) in 8..=4096, got -8",
+        ),
+        (
+            &["render", "--max-memory", "-1", "-o", o],
+            "'--max-memory <SIZE>': `-1` must be at least 1 byte",
+        ),
+        (
+            &["render", "--max-memory", "-1G", "-o", o],
+            "'--max-memory <SIZE>': `-1G` must be at least 1 byte",
+        ),
+        (
+            &["check", "--max-code-diff", "-1"],
+            "'--max-code-diff <N>': must be an integer in 0..=65535, got -1",
+        ),
+        (
+            &["sweep", "--grid", grid, "--out", o, "--jobs", "-1"],
+            "'--jobs <JOBS>': must be an integer in 1..=1024, got -1",
+        ),
+        (
+            &["sweep", "--grid", grid, "--out", o, "--flicker", "-3"],
+            "'--flicker <PHASES>': must be an integer in 2..=64, got -3",
+        ),
+        (
+            &["flicker", "--phases", "-3"],
+            "'--phases <PHASES>': must be an integer in 2..=64, got -3",
+        ),
+    ];
+    for (args, msg) in cases {
+        let (code, stdout, stderr) = common::igemu(args);
+        assert_eq!(code, 2, "{args:?}: {stdout}{stderr}");
+        assert!(stderr.contains(msg), "{args:?}: {stderr}");
+        assert!(
+            !stderr.contains("unexpected argument"),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(!out.exists(), "nothing is written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
