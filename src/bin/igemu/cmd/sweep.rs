@@ -84,14 +84,13 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
     for c in &configs {
         for s in &scenes {
-            pipeline::guard_band(s, &c.hw).map_err(|e| {
-                arg_error(
-                    &a.grid,
-                    format!(
-                        "configuration {} ({}) on scene `{}`: {e}",
-                        c.index, c.canonical, s.name
-                    ),
-                )
+            // Located at the grid's key or the scene's line (the configuration's source).
+            pipeline::guard_band(s, &c.hw).map_err(|mut e| {
+                e.msg = format!(
+                    "configuration {} ({}) on scene `{}`: {}",
+                    c.index, c.canonical, s.name, e.msg
+                );
+                e
             })?;
         }
     }
