@@ -1318,3 +1318,138 @@ fn files_cut_anywhere_name_a_field_and_a_line() {
         assert!(refused > base.len() / 2, "{refused}");
     }
 }
+
+/// A negative number given to a count or a size is refused naming the option and its range
+/// (clap read `-8` as a flag: "unexpected argument '-8' found"), before any work.
+#[test]
+fn negative_numbers_name_the_option_and_its_range() {
+    let dir = std::env::temp_dir().join(format!("igemu-negative-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("o.png");
+    let o = out.to_str().unwrap();
+    let grid = "examples/grid.toml";
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["render", "--dof-truth", "--lens-samples", "-8", "-o", o],
+            "'--lens-samples <N>': must be a multiple of 8 (the noise estimate's interleaved groups) in 8..=4096, got -8",
+        ),
+        (
+            &["render", "--max-memory", "-1", "-o", o],
+            "'--max-memory <SIZE>': `-1` must be at least 1 byte",
+        ),
+        (
+            &["render", "--max-memory", "-1G", "-o", o],
+            "'--max-memory <SIZE>': `-1G` must be at least 1 byte",
+        ),
+        (
+            &["check", "--max-code-diff", "-1"],
+            "'--max-code-diff <N>': must be an integer in 0..=65535, got -1",
+        ),
+        (
+            &["sweep", "--grid", grid, "--out", o, "--jobs", "-1"],
+            "'--jobs <JOBS>': must be an integer in 1..=1024, got -1",
+        ),
+        (
+            &["sweep", "--grid", grid, "--out", o, "--flicker", "-3"],
+            "'--flicker <PHASES>': must be an integer in 2..=64, got -3",
+        ),
+        (
+            &["flicker", "--phases", "-3"],
+            "'--phases <PHASES>': must be an integer in 2..=64, got -3",
+        ),
+    ];
+    for (args, msg) in cases {
+        let (code, stdout, stderr) = common::igemu(args);
+        assert_eq!(code, 2, "{args:?}: {stdout}{stderr}");
+        assert!(stderr.contains(msg), "{args:?}: {stderr}");
+        assert!(
+            !stderr.contains("unexpected argument"),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(!out.exists(), "nothing is written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A check across fields or files (the screen against the coordinate format, a grid key)
+/// names each field with the file and line its value comes from (or the preset), says the
+/// fix, and exits 2 before any output is written.
+#[test]
+fn cross_field_refusals_name_each_file_and_line() {
+    let dir = std::env::temp_dir().join(format!("igemu-cross-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let put = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let big_text = "[image]\nwidth = 8192\nheight = 8192\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nnear = 0.1\nfar = 100\n";
+    let big = put("big.toml", big_text);
+    let narrow = put(
+        "hw.toml",
+        "preset = \"linear12\"\n[input]\ncoord = \"Q3.12\"\n[raster]\nguard_band = 4096\n",
+    );
+    let newline = put("g.toml", "[gamma]\n\"dac\\nbits\" = [8, 9]\n");
+    let grid = put("ok-grid.toml", "gamma.dac_bits = [8, 9]\n");
+    let out = dir.join("o.png");
+    let csv = dir.join("s.jsonl");
+    let (o, c) = (out.to_str().unwrap(), csv.to_str().unwrap());
+    let cases: Vec<(Vec<&str>, Vec<String>)> = vec![
+        (
+            vec!["render", &big, "-o", o],
+            vec![
+                format!("{big}:2:1: field `image.width`"),
+                format!("(image.width, {big}:2)"),
+                "(raster.guard_band, preset linear12)".into(),
+                "input.coord = Q13.4 (preset linear12)".into(),
+                "needs coordinates up to 8257 px".into(),
+                "--hw examples/q15-4.toml".into(),
+                "1..=4030".into(),
+            ],
+        ),
+        (
+            vec!["render", "--hw", &narrow, "-o", o],
+            vec![
+                format!("{narrow}:3:1: field `input.coord`"),
+                format!("(raster.guard_band, {narrow}:5)"),
+                format!("input.coord = Q3.12 ({narrow}:3)"),
+                format!("e.g. input.coord = \"Q14.12\" in {narrow}"),
+            ],
+        ),
+        (
+            vec!["sweep", "--grid", &newline, "--out", c, "default"],
+            vec![
+                format!("{newline}:2:1: field `gamma.dac\\nbits`"),
+                "is not a hardware field name".into(),
+            ],
+        ),
+        (
+            vec!["sweep", "--grid", &grid, "--out", c, &big],
+            vec![
+                format!("{big}:2:1: field `image.width`"),
+                "configuration 0 (gamma.dac_bits=8) on scene `big`".into(),
+            ],
+        ),
+    ];
+    for (args, wants) in &cases {
+        let (code, stdout, stderr) = common::igemu(args);
+        assert_eq!(code, 2, "{args:?}: {stdout}{stderr}");
+        for w in wants {
+            assert!(
+                stderr.contains(w.as_str()),
+                "{args:?}: want {w:?} in {stderr}"
+            );
+        }
+        assert!(
+            !out.exists() && !csv.exists(),
+            "{args:?}: nothing is written"
+        );
+    }
+    // The fix the message names holds the screen.
+    let scene = Scene::from_toml(&TomlFile::from_text("big.toml", big_text)).unwrap();
+    let wide = HwConfig::from_toml(&TomlFile::read("examples/q15-4.toml").unwrap()).unwrap();
+    assert!(igemu::pipeline::guard_band(&scene, &wide).is_ok());
+    assert!(igemu::pipeline::guard_band(&scene, &HwConfig::preset("linear12").unwrap()).is_err());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

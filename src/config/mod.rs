@@ -45,7 +45,7 @@ pub use raster::{INTERP_GUARD_BITS, MAX_GUARD_BAND, RasterCfg};
 pub use visibility::VisibilityCfg;
 
 use crate::error::FileError;
-use crate::files::TomlFile;
+use crate::files::{Source, TomlFile};
 use crate::fixed::QFormat;
 use serde::Serialize;
 
@@ -78,6 +78,10 @@ pub struct HwConfig {
     pub dof: DofCfg,
     /// Intensity coding of the stored samples and the frame memory (linear or log).
     pub coding: CodingCfg,
+    /// The file (and preset) it was read from: later checks locate its fields
+    /// ([`HwConfig::error`]).
+    #[serde(skip)]
+    pub source: Source,
 }
 
 /// Overrides `dst` when `v` is given (the overlay's one operation).
@@ -127,6 +131,13 @@ impl HwConfig {
         hw.validate()
             .map_err(|(field, msg)| file.error(&field, msg))?;
         Ok(hw)
+    }
+
+    /// An error at a hardware field, found after parsing (a check against the scene): at
+    /// its file and line when the hardware file gives the field, else naming the file or
+    /// the preset.
+    pub fn error(&self, field: &str, msg: impl Into<String>) -> FileError {
+        self.source.error(&self.name, field, msg)
     }
 
     /// What a hardware field expects, by dotted path (`accumulate.weight_bits` -> `an

@@ -42,6 +42,7 @@ pub(super) fn apply_file(file: &TomlFile) -> Result<HwConfig, FileError> {
         )
     })?;
     hw.name = file.name.clone();
+    hw.source = crate::files::Source::file(file, Some(base));
     let intensity_given = raw.input.as_ref().is_some_and(|i| i.intensity.is_some());
     if let Some(i) = raw.input {
         i.apply(&mut hw.input);

@@ -81,5 +81,6 @@ pub fn preset(name: &str) -> Option<HwConfig> {
             downsample: DownsampleCfg::default(),
         },
         coding,
+        source: crate::files::Source::preset(name),
     })
 }

@@ -2,11 +2,15 @@
 //!
 //! `serde` with `deny_unknown_fields` rejects unknown keys and wrong types with a span;
 //! semantic validation afterwards names a dotted field path, and [`TomlFile::locate`]
-//! turns that path back into a line and column of the user's text.
+//! turns that path back into a line and column of the user's text. A check across fields
+//! (or across a scene and a hardware config) runs after parsing: the value keeps its
+//! [`Source`], which locates each field it names the same way.
 
 mod messages;
+mod source;
 
 pub use messages::{generic_path, num};
+pub use source::Source;
 
 use crate::error::FileError;
 use messages::{describe, line_paths};
@@ -190,12 +194,37 @@ impl TomlFile {
     /// Line and column of a field given as a dotted path, if it is present in the text.
     /// Falls back to the nearest enclosing table that is present.
     pub fn locate(&self, path: &str) -> Option<(usize, usize)> {
+        self.find(path).map(|(at, _)| self.line_col(at))
+    }
+
+    /// Line and column of a field given as a dotted path, only if the text gives the field
+    /// itself (no fallback to its table): where a value comes from.
+    pub fn locate_field(&self, path: &str) -> Option<(usize, usize)> {
+        match self.find(path) {
+            Some((at, true)) => Some(self.line_col(at)),
+            _ => None,
+        }
+    }
+
+    /// The byte offset of the deepest segment of `path` present in the text, and whether
+    /// that is the whole path.
+    fn find(&self, path: &str) -> Option<(usize, bool)> {
+        self.find_segs(&parse_path(path))
+    }
+
+    /// Line and column of a field given by its segments (a key may hold a `.` or a newline
+    /// that a dotted path cannot), falling back to the nearest enclosing table present.
+    pub fn locate_segs(&self, segs: &[Seg]) -> Option<(usize, usize)> {
+        self.find_segs(segs).map(|(at, _)| self.line_col(at))
+    }
+
+    fn find_segs(&self, segs: &[Seg]) -> Option<(usize, bool)> {
         let doc = DeTable::parse(&self.text).ok()?;
-        let segs = parse_path(path);
         let mut best: Option<usize> = None;
+        let mut found = 0;
         let mut table: &DeTable<'_> = doc.get_ref();
         let mut value: Option<&DeValue<'_>> = None;
-        for seg in &segs {
+        for seg in segs {
             match seg {
                 Seg::Key(k) => {
                     let t = match value {
@@ -207,6 +236,7 @@ impl TomlFile {
                         break;
                     };
                     best = Some(key.span().start);
+                    found += 1;
                     table = t;
                     value = Some(v.get_ref());
                 }
@@ -216,11 +246,12 @@ impl TomlFile {
                     };
                     let Some(v) = a.get(*i) else { break };
                     best = Some(v.span().start);
+                    found += 1;
                     value = Some(v.get_ref());
                 }
             }
         }
-        best.map(|o| self.line_col(o))
+        best.map(|o| (o, found == segs.len()))
     }
 
     /// Builds a located error for a field path.
@@ -256,6 +287,10 @@ mod tests {
         assert_eq!(f.locate("object[1].missing"), f.locate("object[1]"));
         assert!(f.locate("object[1]").is_some());
         assert!(f.locate("nothing").is_none());
+        // Only the field itself, for where a value comes from.
+        assert_eq!(f.locate_field("object[1].radius"), Some((9, 1)));
+        assert_eq!(f.locate_field("object[1].missing"), None);
+        assert_eq!(f.locate_field("camera.far"), None);
     }
 
     #[test]

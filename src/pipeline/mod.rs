@@ -158,18 +158,17 @@ fn check_memory(scene: &Scene, plan: &Plan, opts: RunOptions) -> Result<()> {
         .iter()
         .map(|p| format!("{} {} from {}", p.what, estimate::human(p.bytes), p.drivers))
         .collect();
-    Err(crate::error::Error::File(crate::error::FileError {
-        file: scene.name.clone(),
-        line: None,
-        col: None,
-        field: "image.width, image.height, raster.samples".into(),
-        msg: format!(
-            "the plan needs about {} ({}) but the limit is {} (--max-memory; by default half the machine's memory); reduce the resolution or raster.samples, or raise --max-memory",
-            estimate::human(e.bytes),
-            parts.join("; "),
-            estimate::human(limit)
-        ),
-    }))
+    Err(scene
+        .error(
+            "image.width, image.height, raster.samples",
+            format!(
+                "the plan needs about {} ({}) but the limit is {} (--max-memory; by default half the machine's memory); reduce the resolution or raster.samples, or raise --max-memory",
+                estimate::human(e.bytes),
+                parts.join("; "),
+                estimate::human(limit)
+            ),
+        )
+        .into())
 }
 
 /// Runs the plan through stage `last` and returns the taps after it (for test vectors and

@@ -61,16 +61,7 @@ pub fn guard_band(scene: &Scene, hw: &HwConfig) -> std::result::Result<GuardBand
     let max = f.max_code() as f64 * f.lsb();
     let need = w.max(h) + gb + 1.0;
     if need > max {
-        let bits = (need.log2().ceil() as u32) + 1;
-        return Err(FileError {
-            file: hw.name.clone(),
-            line: None,
-            col: None,
-            field: "input.coord".into(),
-            msg: format!(
-                "{f} holds coordinates up to {max} px but the screen ({w}x{h}) plus the guard band ({gb} px) needs {need}; use at least {bits} integer bits"
-            ),
-        });
+        return Err(too_narrow(scene, hw, max, need));
     }
     Ok(GuardBand {
         x_min: -gb,
@@ -78,6 +69,49 @@ pub fn guard_band(scene: &Scene, hw: &HwConfig) -> std::result::Result<GuardBand
         y_min: -gb,
         y_max: h + gb,
     })
+}
+
+/// The refusal of an `input.coord` that cannot hold the screen plus the guard band (up to
+/// `max` px, `need` needed): a check across two files, so it names each of the three fields
+/// with where its value comes from (file:line, or the preset), says the fix, and is located
+/// at `input.coord` when the hardware file gives it, else at the scene's larger side.
+fn too_narrow(scene: &Scene, hw: &HwConfig, max: f64, need: f64) -> FileError {
+    let (w, h) = (scene.image.width, scene.image.height);
+    let (f, gb) = (hw.input.coord.format, hw.raster.guard_band);
+    let side = if h > w { "image.height" } else { "image.width" };
+    let src = &hw.source;
+    let (coord_at, gb_at) = (
+        src.origin("input.coord", &hw.name),
+        src.origin("raster.guard_band", &hw.name),
+    );
+    let side_at = scene.source.origin(side, &scene.name);
+    let bits = (need.log2().ceil() as u32) + 1;
+    let wide = crate::fixed::QFormat::new(true, bits, f.frac_bits);
+    let fix = match (src.file_name(), src.base()) {
+        // examples/q15-4.toml: linear12 with Q15.4 (holds 8192 px plus the largest band).
+        (None, Some(b)) if b == crate::config::PRESETS[0] && f.frac_bits == 4 && bits <= 15 => {
+            format!(": --hw examples/q15-4.toml is {b} with input.coord = \"Q15.4\"")
+        }
+        (None, Some(b)) => {
+            format!(": a hardware file with preset = \"{b}\" and [input] coord = \"{wide}\"")
+        }
+        (Some(file), _) => format!(", e.g. input.coord = \"{wide}\" in {file}"),
+        (None, None) => format!(", e.g. \"{wide}\""),
+    };
+    let fit = (max - gb as f64 - 1.0).floor();
+    let fit = if fit >= 1.0 {
+        format!("; or image.width and image.height in 1..={fit} with this hardware")
+    } else {
+        String::new()
+    };
+    let msg = format!(
+        "the {w}x{h} screen ({side}, {side_at}) plus the guard band of {gb} px (raster.guard_band, {gb_at}) needs coordinates up to {need} px, but input.coord = {f} ({coord_at}) holds up to {max} px; give input.coord at least {bits} integer bits{fix}{fit}"
+    );
+    if src.locate("input.coord").is_none() && scene.source.locate(side).is_some() {
+        scene.error(side, msg)
+    } else {
+        hw.error("input.coord", msg)
+    }
 }
 
 /// Which stages run, in which order, with every decision.

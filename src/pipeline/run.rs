@@ -148,15 +148,14 @@ fn stage_key(stage: &dyn DynStage, cx: &Cx, input: u64, opts: RunOptions) -> u64
 
 /// The error of asking for the taps of a stage a banded run keeps no whole-screen taps of.
 fn banded_tap(scene: &Scene, id: StageId, rows: u32) -> crate::error::Error {
-    crate::error::Error::File(crate::error::FileError {
-        file: scene.name.clone(),
-        line: None,
-        col: None,
-        field: "image.width, image.height".into(),
-        msg: format!(
-            "this plan runs raster, visibility and accumulate in bands of {rows} pixel rows (the screen's sample buffers would not fit in memory at once): there is no whole-screen `{id}` tap; use a smaller screen"
-        ),
-    })
+    scene
+        .error(
+            "image.width, image.height",
+            format!(
+                "this plan runs raster, visibility and accumulate in bands of {rows} pixel rows (the screen's sample buffers would not fit in memory at once): there is no whole-screen `{id}` tap; use a smaller screen"
+            ),
+        )
+        .into()
 }
 
 /// Runs one stage through the contract on the taps of its input.

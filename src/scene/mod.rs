@@ -25,7 +25,7 @@ mod tessellate;
 mod vec3;
 
 use crate::error::FileError;
-use crate::files::TomlFile;
+use crate::files::{Source, TomlFile};
 use serde::Serialize;
 
 pub use project::{LensPoint, depth_from_screen_z, front_end, front_end_through, screen_z};
@@ -88,6 +88,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Objects, drawn in this order.
     pub objects: Vec<Object>,
+    /// The file it was read from: later checks locate its fields ([`Scene::error`]).
+    #[serde(skip)]
+    pub source: Source,
 }
 
 /// Image size and background (`[image]`).
@@ -394,6 +397,12 @@ impl Scene {
     /// that is not a field.
     pub fn field_hint(path: &str) -> Option<String> {
         parse::hint(path)
+    }
+
+    /// An error at a scene field, found after parsing (a check against the hardware): at
+    /// its file and line when the scene file gives the field, else naming the scene.
+    pub fn error(&self, field: &str, msg: impl Into<String>) -> FileError {
+        self.source.error(&self.name, field, msg)
     }
 
     /// Reads, parses and validates a scene file from disk.

@@ -14,7 +14,7 @@
 
 use crate::config::HwConfig;
 use crate::error::FileError;
-use crate::files::TomlFile;
+use crate::files::{Seg, TomlFile};
 use std::collections::BTreeMap;
 
 /// One point of the grid: field path -> value, plus the validated hardware.
@@ -38,20 +38,42 @@ pub struct Grid {
     pub axes: Vec<(String, Vec<toml::Value>)>,
 }
 
+/// Refuses a key that no hardware field has (a newline, a space, `=` or a quote in it: the
+/// configuration's text would not say what the grid says), at its line; `keys` are the keys
+/// down to it, the last one checked.
+fn check_key(file: &TomlFile, keys: &[String]) -> Result<(), FileError> {
+    let ok = |c: char| c.is_ascii_alphanumeric() || "_-.".contains(c);
+    let key = keys.last().map_or("", String::as_str);
+    if !key.is_empty() && key.chars().all(ok) {
+        return Ok(());
+    }
+    let segs: Vec<Seg> = keys.iter().cloned().map(Seg::Key).collect();
+    let (line, col) = file.locate_segs(&segs).unzip();
+    let shown: Vec<String> = keys.iter().map(|k| k.escape_debug().to_string()).collect();
+    Err(FileError {
+        file: file.name.clone(),
+        line,
+        col,
+        field: shown.join("."),
+        msg: format!(
+            "the key \"{}\" is not a hardware field name: a grid key is a dotted field path of letters, digits, `_` and `-` (e.g. `gamma.dac_bits = [8, 9]`)",
+            shown.last().map_or("", String::as_str)
+        ),
+    })
+}
+
 fn flatten(
     file: &TomlFile,
-    prefix: &str,
+    prefix: &[String],
     t: &toml::Table,
     out: &mut Vec<(String, Vec<toml::Value>)>,
 ) -> Result<(), FileError> {
     for (k, v) in t {
-        let path = if prefix.is_empty() {
-            k.clone()
-        } else {
-            format!("{prefix}.{k}")
-        };
+        let keys = [prefix, std::slice::from_ref(k)].concat();
+        check_key(file, &keys)?;
+        let path = keys.join(".");
         match v {
-            toml::Value::Table(sub) => flatten(file, &path, sub, out)?,
+            toml::Value::Table(sub) => flatten(file, &keys, sub, out)?,
             toml::Value::Array(a) if a.is_empty() => {
                 return Err(file.error(
                     &path,
@@ -81,7 +103,7 @@ impl Grid {
     pub fn parse(file: &TomlFile) -> Result<Grid, FileError> {
         let t: toml::Table = file.parse()?;
         let mut axes = Vec::new();
-        flatten(file, "", &t, &mut axes)?;
+        flatten(file, &[], &t, &mut axes)?;
         if axes.is_empty() {
             return Err(file.error(
                 "",
@@ -116,6 +138,8 @@ impl Grid {
     pub fn expand(&self, file: &TomlFile) -> Result<Vec<Config>, FileError> {
         let total = self.len();
         let mut out = Vec::with_capacity(total);
+        // A configuration's fields are the grid's keys: later checks locate them there.
+        let source = crate::files::Source::file(file, None);
         for index in 0..total {
             let mut rest = index;
             let mut picks = vec![0usize; self.axes.len()];
@@ -164,6 +188,7 @@ impl Grid {
                 }
             })?;
             hw.name = canonical.clone();
+            hw.source = source.with_base(hw.source.base());
             out.push(Config {
                 index,
                 fields,

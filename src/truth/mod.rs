@@ -63,9 +63,16 @@ pub const DEFAULT_SAMPLES: u32 = 256;
 
 /// Checks a lens-sample count: a multiple of [`GROUPS`] in
 /// [`MIN_SAMPLES`]`..=`[`MAX_SAMPLES`]; the message names the range (the caller names the
-/// flag, `--lens-samples`).
-pub fn check_samples(n: u32) -> Result<(), String> {
-    if (MIN_SAMPLES..=MAX_SAMPLES).contains(&n) && n.is_multiple_of(GROUPS) {
+/// flag, `--lens-samples`). Any integer is checked (a negative count from the command line
+/// too), so the message says the number given.
+pub fn check_samples(n: impl Into<i64>) -> Result<(), String> {
+    let n: i64 = n.into();
+    let (lo, hi, g) = (
+        i64::from(MIN_SAMPLES),
+        i64::from(MAX_SAMPLES),
+        i64::from(GROUPS),
+    );
+    if (lo..=hi).contains(&n) && n % g == 0 {
         Ok(())
     } else {
         Err(format!(

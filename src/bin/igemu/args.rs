@@ -22,7 +22,7 @@ pub struct SceneArgs {
     #[arg(long)]
     pub hw: Option<String>,
     /// Refuse a render whose memory estimate exceeds SIZE (bytes, or with K, M, G, T: 512M, 8G; default half the machine's memory).
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = parse_size, allow_hyphen_values = true)]
     pub max_memory: Option<u64>,
 }
 
@@ -60,7 +60,7 @@ pub struct TruthArgs {
     #[arg(long)]
     pub dof_truth: bool,
     /// Lens points the truth averages: a multiple of 8 in 8..=4096 (default 256); the noise falls as 1/sqrt(N), the time grows as N.
-    #[arg(long, value_name = "N", requires = "dof_truth", value_parser = parse_lens_samples)]
+    #[arg(long, value_name = "N", requires = "dof_truth", value_parser = parse_lens_samples, allow_negative_numbers = true)]
     pub lens_samples: Option<u32>,
 }
 
@@ -75,9 +75,10 @@ impl TruthArgs {
     }
 }
 
-/// Parses `--lens-samples`: a number checked by [`igemu::truth::check_samples`].
+/// Parses `--lens-samples`: an integer (negative ones too: the arg allows them) checked by
+/// [`igemu::truth::check_samples`].
 pub fn parse_lens_samples(s: &str) -> Result<u32, String> {
-    let n: u32 = s.trim().parse().map_err(|_| {
+    let n: i64 = s.trim().parse().map_err(|_| {
         format!(
             "`{s}` is not a count: give a multiple of {} in {}..={}",
             igemu::truth::GROUPS,
@@ -86,7 +87,18 @@ pub fn parse_lens_samples(s: &str) -> Result<u32, String> {
         )
     })?;
     igemu::truth::check_samples(n)?;
-    Ok(n)
+    Ok(n as u32)
+}
+
+/// A value parser of an integer in `lo..=hi`: a number outside it, a negative one included,
+/// is refused with the range (give the arg `allow_negative_numbers`, or clap reads `-1` as a
+/// flag and names no range).
+pub fn int_in(lo: u32, hi: u32) -> impl Fn(&str) -> Result<u32, String> + Clone + Send + Sync {
+    move |s| match s.trim().parse::<i64>() {
+        Ok(n) if (i64::from(lo)..=i64::from(hi)).contains(&n) => Ok(n as u32),
+        Ok(n) => Err(format!("must be an integer in {lo}..={hi}, got {n}")),
+        Err(_) => Err(format!("`{s}` is not an integer: give one in {lo}..={hi}")),
+    }
 }
 
 /// Parses a size: bytes, or a number with `K`, `M`, `G` or `T` (binary units; an optional

@@ -11,7 +11,7 @@
 
 use super::{RANDOM, TAPS, bad};
 use crate::config::{DofKernel, DofKind, HwConfig};
-use crate::error::{Error, FileError, Result};
+use crate::error::{Error, Result};
 use crate::hdl::bench::{Bench, Rng};
 use crate::pipeline;
 use crate::scene::{Lens, Scene};
@@ -31,13 +31,10 @@ fn bits(v: u128) -> u32 {
 pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
     let p = &hw.dof;
     if !matches!(scene.camera.lens, Lens::ThinLens { .. }) {
-        return Err(Error::File(FileError {
-            file: scene.name.clone(),
-            line: None,
-            col: None,
-            field: "camera.lens".into(),
-            msg: "the dof row MAC needs a thin-lens camera (depth of field); this scene has a pinhole camera (the default and cone-focus scenes have a thin lens)".into(),
-        }));
+        return Err(Error::File(scene.error(
+            "camera.lens",
+            "the dof row MAC needs a thin-lens camera (depth of field); this scene has a pinhole camera (the default and cone-focus scenes have a thin lens)",
+        )));
     }
     if p.kind != DofKind::Layered {
         return Err(bad(

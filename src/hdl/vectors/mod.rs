@@ -7,7 +7,7 @@
 use super::bench::{Bench, Rng};
 use super::{MODULES, module_of};
 use crate::config::HwConfig;
-use crate::error::{Error, FileError, Result};
+use crate::error::{Error, Result};
 use crate::pipeline;
 use crate::scene::Scene;
 use crate::stage::RunOptions;
@@ -30,13 +30,7 @@ const TAPS: usize = 2000;
 
 /// An error naming `field` of the hardware config.
 pub(crate) fn bad(hw: &HwConfig, field: &str, msg: String) -> Error {
-    Error::File(FileError {
-        file: hw.name.clone(),
-        line: None,
-        col: None,
-        field: field.into(),
-        msg,
-    })
+    Error::File(hw.error(field, msg))
 }
 
 /// Up to `max` frame codes from the scene's fixed render, evenly spread over the image.

@@ -213,6 +213,7 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         shading,
         lights,
         objects,
+        source: crate::files::Source::file(file, None),
     })
 }
 

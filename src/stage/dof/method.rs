@@ -4,7 +4,7 @@
 //! the stage-local comparison, the reference notes).
 
 use super::LensMap;
-use crate::error::{Error, FileError, Result};
+use crate::error::{Error, Result};
 use crate::stage::accumulate::Frame;
 use crate::stage::{Cost, Cx, Facts, MemImage, Tokens};
 
@@ -54,11 +54,5 @@ pub fn n2(cx: &Cx) -> u32 {
 /// A method's plan refused for a blur wider than `dof.max_half_size` allows (`msg` says by
 /// how much and what to change), naming the hardware file and the field.
 pub fn half_size_error(cx: &Cx, msg: String) -> Error {
-    Error::File(FileError {
-        file: cx.hw.name.clone(),
-        line: None,
-        col: None,
-        field: "dof.max_half_size".into(),
-        msg,
-    })
+    Error::File(cx.hw.error("dof.max_half_size", msg))
 }

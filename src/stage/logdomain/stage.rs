@@ -6,7 +6,7 @@
 
 use super::{LogCode, LogEncoder, PotentiationLut, check_contrast};
 use crate::config::{CodingKind, HwConfig};
-use crate::error::{Error, FileError, Result};
+use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::stage::taps::{SampleCoding, SampleTap, Taps};
 use crate::stage::visibility::{sample_buffer, sample_image};
@@ -17,15 +17,7 @@ use std::sync::Arc;
 /// The log code of a scene and hardware config (K from the scene's display block).
 pub fn log_code(scene: &Scene, hw: &HwConfig) -> Result<LogCode> {
     let k = scene.display.contrast;
-    check_contrast(k).map_err(|msg| {
-        Error::File(FileError {
-            file: scene.name.clone(),
-            line: None,
-            col: None,
-            field: "display.contrast".into(),
-            msg,
-        })
-    })?;
+    check_contrast(k).map_err(|msg| Error::File(scene.error("display.contrast", msg)))?;
     Ok(LogCode {
         k,
         bits: hw.coding.log_bits,

@@ -12,8 +12,8 @@ use std::process::ExitCode;
 pub struct CheckArgs {
     #[command(flatten)]
     pub s: SceneArgs,
-    /// Fail when any DAC code differs from the reference by more than N.
-    #[arg(long)]
+    /// Fail when any DAC code differs from the reference by more than N (0..=65535: DAC codes have at most 16 bits).
+    #[arg(long, value_name = "N", value_parser = crate::args::int_in(0, 65535), allow_negative_numbers = true)]
     pub max_code_diff: Option<u32>,
     /// Fail when the fraction of identical DAC codes is below F (0..=1).
     #[arg(long, allow_negative_numbers = true)]

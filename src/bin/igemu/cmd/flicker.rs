@@ -1,7 +1,7 @@
 //! `igemu flicker`: small-object flicker, a light point and a thin line swept over
 //! sub-pixel phases.
 
-use crate::args::{FilterArg, arg_error};
+use crate::args::FilterArg;
 use crate::out::outln;
 use clap::Args;
 use igemu::config::HwConfig;
@@ -20,7 +20,7 @@ pub struct FlickerArgs {
     #[arg(long)]
     pub no_gamma_correction: bool,
     /// Sub-pixel phases per axis (2..=64).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, value_parser = crate::args::int_in(2, 64), allow_negative_numbers = true)]
     pub phases: u32,
     /// Print JSON.
     #[arg(long)]
@@ -29,12 +29,6 @@ pub struct FlickerArgs {
 
 /// Runs `igemu flicker`; returns the exit code.
 pub fn run(a: FlickerArgs) -> Result<ExitCode, Error> {
-    if !(2..=64).contains(&a.phases) {
-        return Err(arg_error(
-            "--phases",
-            format!("must be in 2..=64, got {}", a.phases),
-        ));
-    }
     let mut hw = HwConfig::resolve(a.hw.as_deref())?;
     if let Some(f) = a.filter {
         hw.accumulate.filter = f.into();

@@ -26,9 +26,9 @@ pub struct SweepArgs {
     /// Run only shard K of N (contiguous blocks: the shard files concatenate to the full run); `auto` takes it from a Slurm array task (SLURM_ARRAY_TASK_ID, _MIN, _COUNT, _STEP), `auto/N` also from a Kubernetes indexed Job (JOB_COMPLETION_INDEX of N).
     #[arg(long, value_name = "K/N|auto|auto/N")]
     pub shard: Option<String>,
-    /// Configurations rendered in parallel (1 = serial; results are identical).
-    #[arg(long, default_value_t = 1)]
-    pub jobs: usize,
+    /// Configurations rendered in parallel, 1..=1024 (1 = serial; results are identical).
+    #[arg(long, default_value_t = 1, value_parser = crate::args::int_in(1, 1024), allow_negative_numbers = true)]
+    pub jobs: u32,
     /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker), truth_total, truth_algorithm, truth_quantisation (mean Weber against the depth-of-field truth; need --dof-truth), emulator_time (the fixed models' ms).
     #[arg(long, default_value = "error,cost")]
     pub axes: String,
@@ -42,10 +42,10 @@ pub struct SweepArgs {
     #[arg(long, value_name = "SWEEP.html")]
     pub html: Option<String>,
     /// Add small-object flicker metrics to every row: the flicker scene swept over PHASES x PHASES sub-pixel phases (2..=64; `igemu flicker` uses 32).
-    #[arg(long, value_name = "PHASES")]
+    #[arg(long, value_name = "PHASES", value_parser = crate::args::int_in(2, 64), allow_negative_numbers = true)]
     pub flicker: Option<u32>,
     /// Refuse a render whose memory estimate exceeds SIZE (bytes, or with K, M, G, T; default half the machine's memory); with --jobs N, N renders run at once.
-    #[arg(long, value_name = "SIZE", value_parser = crate::args::parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = crate::args::parse_size, allow_hyphen_values = true)]
     pub max_memory: Option<u64>,
     /// Errors of every row against the depth-of-field truth (computed once per scene).
     #[command(flatten)]
@@ -70,23 +70,9 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         Some(s) => Some(shard_arg(s)?),
         None => None,
     };
-    if a.jobs == 0 || a.jobs > 1024 {
-        return Err(arg_error(
-            "--jobs",
-            format!("must be in 1..=1024, got {}", a.jobs),
-        ));
-    }
     let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
     if let Some(p) = &a.plot {
         sweep::plot::PlotFormat::of(p).map_err(|m| arg_error("--plot", m))?;
-    }
-    if let Some(n) = a.flicker
-        && !(2..=64).contains(&n)
-    {
-        return Err(arg_error(
-            "--flicker",
-            format!("phases must be in 2..=64, got {n}"),
-        ));
     }
     if a.flicker.is_none() && axes.contains(&pareto::Axis::Flicker) {
         return Err(arg_error(
@@ -98,14 +84,13 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
     for c in &configs {
         for s in &scenes {
-            pipeline::guard_band(s, &c.hw).map_err(|e| {
-                arg_error(
-                    &a.grid,
-                    format!(
-                        "configuration {} ({}) on scene `{}`: {e}",
-                        c.index, c.canonical, s.name
-                    ),
-                )
+            // Located at the grid's key or the scene's line (the configuration's source).
+            pipeline::guard_band(s, &c.hw).map_err(|mut e| {
+                e.msg = format!(
+                    "configuration {} ({}) on scene `{}`: {}",
+                    c.index, c.canonical, s.name, e.msg
+                );
+                e
             })?;
         }
     }
@@ -114,7 +99,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         out: &a.out,
         resume: a.resume,
         shard,
-        jobs: a.jobs,
+        jobs: a.jobs as usize,
         cache: if a.no_reuse { None } else { Some(&cache) },
         flicker: a.flicker,
         max_memory: a.max_memory,
