@@ -21,7 +21,8 @@ fn bench(c: &mut Criterion) {
         grid,
         guard: hw.raster.interp_guard_bits,
         quant: hw.raster.interp_quant,
-        i_max: 65535,
+        i_max: [65535; 3],
+        channels: 1,
         z_max: (1 << 24) - 1,
     };
     let fprims: Vec<FPrim> = q.iter().map(|p| FPrim::from_q(p, grid.sub_bits)).collect();

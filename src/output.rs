@@ -4,7 +4,7 @@
 //! PNG writers of DAC codes, raw taps and difference maps use it.
 
 use crate::error::{Error, Result};
-use image::{ImageBuffer, ImageFormat, Luma};
+use image::{ImageBuffer, ImageFormat, Luma, Rgb};
 use std::fs::{File, OpenOptions};
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -266,6 +266,43 @@ pub fn write_dac(path: &str, codes: &[u16], width: u32, height: u32, bits: u32) 
     }
 }
 
+/// Writes an RGB image of DAC codes, one plane per channel (R, G, B) of its own width
+/// (`bits`, e.g. 5-6-5): an 8-bit RGB PNG when every channel has at most 8 bits, else 16-bit,
+/// each channel scaled to the PNG's full range as in [`write_dac`].
+pub fn write_rgb(
+    path: &str,
+    planes: [&[u16]; 3],
+    bits: [u32; 3],
+    width: u32,
+    height: u32,
+) -> Result<()> {
+    let max = bits.map(|b| ((1u32 << b) - 1) as f64);
+    let n = planes[0].len();
+    // Interleaved R, G, B, each channel scaled to `top`.
+    let scaled = |top: f64| (0..3 * n).map(move |k| planes[k % 3][k / 3] as f64 * top / max[k % 3]);
+    if bits.iter().all(|&b| b <= 8) {
+        let data: Vec<u8> = scaled(255.0).map(|v| v.round() as u8).collect();
+        save(
+            ImageBuffer::<Rgb<u8>, _>::from_raw(width, height, data).expect("size matches"),
+            path,
+        )
+    } else {
+        let data: Vec<u16> = scaled(65535.0).map(|v| v.round() as u16).collect();
+        save(
+            ImageBuffer::<Rgb<u16>, _>::from_raw(width, height, data).expect("size matches"),
+            path,
+        )
+    }
+}
+
+/// Writes 8-bit RGB values as they are (`data` interleaved R, G, B per pixel).
+pub fn write_rgb8(path: &str, data: &[u8], width: u32, height: u32) -> Result<()> {
+    save(
+        ImageBuffer::<Rgb<u8>, _>::from_raw(width, height, data.to_vec()).expect("size matches"),
+        path,
+    )
+}
+
 /// Writes raw codes (unscaled) as a 16-bit grey PNG; codes above 65535 are an error.
 pub fn write_raw16(path: &str, codes: &[u32], width: u32, height: u32) -> Result<()> {
     if let Some(&c) = codes.iter().find(|&&c| c > u16::MAX as u32) {
@@ -290,15 +327,20 @@ pub fn write_diff(
     width: u32,
     height: u32,
 ) -> Result<()> {
-    let data: Vec<u8> = fixed
-        .iter()
-        .zip(reference)
-        .map(|(&a, &b)| (128 + 32 * (a as i32 - b as i32)).clamp(0, 255) as u8)
-        .collect();
+    let data = diff_values(fixed, reference);
     save(
         ImageBuffer::<Luma<u8>, _>::from_raw(width, height, data).expect("size matches"),
         path,
     )
+}
+
+/// The difference map's values (see [`write_diff`]).
+pub fn diff_values(fixed: &[u16], reference: &[u16]) -> Vec<u8> {
+    fixed
+        .iter()
+        .zip(reference)
+        .map(|(&a, &b)| (128 + 32 * (a as i32 - b as i32)).clamp(0, 255) as u8)
+        .collect()
 }
 
 /// Writes 8-bit grey values as they are.

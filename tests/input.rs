@@ -145,10 +145,10 @@ fn full_white_is_the_top_integer_code() {
         let step = input_step(&s, &h, RunOptions::FAST);
         let prims = step.outcome.taps.fixed.prims();
         assert_eq!(
-            prims.bg as i64, white,
+            prims.bg[0] as i64, white,
             "background 1.0 in UQ{int_bits}.{frac}"
         );
-        let codes: Vec<i64> = prims.q.iter().flat_map(qverts).map(|v| v.i).collect();
+        let codes: Vec<i64> = prims.q.iter().flat_map(qverts).map(|v| v.i[0]).collect();
         assert_eq!(codes[0], white, "full white in UQ{int_bits}.{frac}");
         assert_eq!(codes[1], 0);
         for (&i, &c) in is.iter().zip(&codes) {
@@ -167,7 +167,7 @@ fn full_white_is_the_top_integer_code() {
     let QPrim::Point { v, .. } = step.outcome.taps.fixed.prims().q[0] else {
         panic!("a light point")
     };
-    assert_eq!(v.i, (1 << 16) - 1);
+    assert_eq!(v.i[0], (1 << 16) - 1);
     assert_eq!(step.outcome.report.signals[3].overflows, 1);
 }
 
@@ -219,14 +219,15 @@ fn host(prims: Vec<Primitive>) -> HostScene {
     HostScene {
         width: 64,
         height: 48,
-        background: 0.0,
+        background: [0.0; 3],
+        channels: 1,
         prims,
         stats: FrontEndStats::default(),
     }
 }
 
 fn sv(x: f64, y: f64, z: f64, i: f64) -> ScreenVertex {
-    ScreenVertex { x, y, z, i }
+    ScreenVertex { x, y, z, i: [i; 3] }
 }
 
 #[test]
@@ -249,7 +250,7 @@ fn overflow_mode_error_names_the_signal() {
         ),
     ];
     for (bad, name, fmt, value) in cases {
-        let e = input::quantize(&host(vec![Primitive::Triangle([ok, bad, ok])]), &h)
+        let e = input::quantize(&host(vec![Primitive::Triangle([ok, bad, ok])]), &h, 1)
             .err()
             .unwrap_or_else(|| panic!("{name}: no error"));
         let msg = e.to_string();
@@ -269,6 +270,7 @@ fn overflow_mode_error_names_the_signal() {
         let sat = input::quantize(
             &host(vec![Primitive::Triangle([ok, bad, ok])]),
             &HwConfig::default_config(),
+            1,
         )
         .unwrap();
         let st = sat.signals.iter().find(|s| s.name == name).unwrap();

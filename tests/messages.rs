@@ -452,7 +452,7 @@ const SCENE_CASES: &[Case] = &[
         "intensity = [0.2, 0.4]",
         "object[3].intensity",
         "",
-        "3 finite numbers in [0, 1e6]",
+        "an array of 3 intensities (one per vertex)",
     ),
     c(
         "intensity = [0.2, 0.4, 0.6]",

@@ -19,7 +19,8 @@ fn params(n: u32, w: u32, h: u32) -> (RasterParams, SampleRegion) {
         grid,
         guard: 14,
         quant: Quant::RndConv,
-        i_max: (1 << 16) - 1,
+        i_max: [(1 << 16) - 1; 3],
+        channels: 1,
         z_max: (1 << 24) - 1,
     };
     let reg = SampleRegion {
@@ -36,7 +37,7 @@ fn v(x: f64, y: f64, z: i64, i: i64) -> QVertex {
         x: (x * 16.0).round() as i64,
         y: (y * 16.0).round() as i64,
         z,
-        i,
+        i: [i, 0, 0],
     }
 }
 
@@ -224,7 +225,7 @@ fn drift(t: [QVertex; 3], n: u32, w: u32, h: u32, guard: u32) -> (f64, u64, u64)
         }
         match it.peek() {
             Some(g) if g.s == f.s => {
-                max = max.max((f.i as f64 - g.i).abs());
+                max = max.max((f.i[0] as f64 - g.i[0]).abs());
                 it.next();
             }
             _ => mismatch += 1,

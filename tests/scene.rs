@@ -120,7 +120,7 @@ fn default_scene_loads_and_its_front_end_is_sane() {
     let g = GuardBand::around(640, 480, 64.0);
     let h = front_end(&s, &g);
     assert_eq!((h.width, h.height), (640, 480));
-    assert!(h.background > 0.0 && h.background < 0.1);
+    assert!(h.background[0] > 0.0 && h.background[0] < 0.1);
     let tris = triangles(&h);
     assert!(tris.len() > 1000, "{}", tris.len());
     assert_eq!(h.stats.triangles_out, tris.len());
@@ -131,7 +131,10 @@ fn default_scene_loads_and_its_front_end_is_sane() {
     for t in &tris {
         for v in t {
             assert!(
-                v.x.is_finite() && v.y.is_finite() && v.z.is_finite() && v.i.is_finite(),
+                v.x.is_finite()
+                    && v.y.is_finite()
+                    && v.z.is_finite()
+                    && v.i.iter().all(|i| i.is_finite()),
                 "{v:?}"
             );
             assert!(g.contains(v.x, v.y), "{v:?}");
@@ -141,8 +144,8 @@ fn default_scene_loads_and_its_front_end_is_sane() {
                 "{v:?}"
             );
             assert!((0.0..=1.0).contains(&v.z), "{v:?}");
-            i_max = i_max.max(v.i);
-            i_min = i_min.min(v.i);
+            i_max = i_max.max(v.i[0]);
+            i_min = i_min.min(v.i[0]);
         }
         assert!(area2(t).abs() > 0.0);
     }
@@ -176,19 +179,19 @@ fn vertex_shading_matches_a_hand_computed_case() {
     // A second light exactly behind (e + l = 0, n.l = -1) adds nothing.
     // i = 0.1 + 0.5 * (0.2 + 0.5 * 0.8) + 0.25 * 0.5 * 0.9 = 0.5125
     let m = Material {
-        reflectance: 0.5,
+        reflectance: [0.5; 3],
         specular: 0.25,
         shininess: 2.0,
-        emissive: 0.1,
+        emissive: [0.1; 3],
     };
     let lights = [
         Light {
             direction: [0.0, 0.6, 0.8],
-            intensity: 0.5,
+            intensity: [0.5; 3],
         },
         Light {
             direction: [0.0, 0.0, -1.0],
-            intensity: 1.0,
+            intensity: [1.0; 3],
         },
     ];
     let i = shade_vertex(
@@ -199,7 +202,7 @@ fn vertex_shading_matches_a_hand_computed_case() {
         0.2,
         &lights,
     );
-    assert!((i - 0.5125).abs() < 1e-12, "{i}");
+    assert!(i.iter().all(|&i| (i - 0.5125).abs() < 1e-12), "{i:?}");
 
     // The same through the scene file and the front end: a raw world-space triangle facing
     // the camera with a vertex on the view axis (projected to the screen centre), both windings
@@ -233,7 +236,7 @@ emissive = 0.1
             (v.x - 32.0).abs() < 1e-9 && (v.y - 24.0).abs() < 1e-9,
             "{v:?}"
         );
-        assert!((v.i - 0.5125).abs() < 1e-12, "{v:?}");
+        assert!((v.i[0] - 0.5125).abs() < 1e-12, "{v:?}");
         assert!((v.z - screen_z(&s.camera, 5.0)).abs() < 1e-12);
     }
 }
@@ -302,7 +305,7 @@ tessellation = 256
         tessellate(&Object::LightPoint {
             space: Space::World,
             position: [0.0; 3],
-            intensity: 1.0,
+            intensity: [1.0; 3],
             size: 1.0
         })
         .is_none()
@@ -372,10 +375,10 @@ intensity = [0.0, 0.5, 1.0]
     let mut on_near = 0;
     for t in &tris {
         for v in t {
-            assert!(v.x.is_finite() && v.y.is_finite() && v.i.is_finite());
+            assert!(v.x.is_finite() && v.y.is_finite() && v.i[0].is_finite());
             assert!((0.0..=1.0).contains(&v.z), "{v:?}");
             assert!(depth_from_screen_z(&s.camera, v.z) >= 1.0 - 1e-12);
-            assert!((0.0..=1.0).contains(&v.i));
+            assert!((0.0..=1.0).contains(&v.i[0]));
             if v.z == 0.0 {
                 on_near += 1;
             }
@@ -420,19 +423,19 @@ fn guard_band_clipping_preserves_the_on_screen_area_and_the_plane_equations() {
             x: -1e6,
             y: -1e6,
             z: 0.1,
-            i: 0.0,
+            i: [0.0; 3],
         },
         ScreenVertex {
             x: 1e6,
             y: 20.0,
             z: 0.9,
-            i: 1.0,
+            i: [1.0; 3],
         },
         ScreenVertex {
             x: 30.0,
             y: 1e6,
             z: 0.5,
-            i: 2.0,
+            i: [2.0; 3],
         },
     ];
     let s = scene(&format!(
@@ -479,7 +482,7 @@ intensity = [{}]
     };
     for v in tris.iter().flatten() {
         assert!((v.z - plane(|v| v.z, v.x, v.y)).abs() < 1e-6, "{v:?}");
-        assert!((v.i - plane(|v| v.i, v.x, v.y)).abs() < 1e-6, "{v:?}");
+        assert!((v.i[0] - plane(|v| v.i[0], v.x, v.y)).abs() < 1e-6, "{v:?}");
     }
 
     // Entirely outside the band: dropped.
@@ -546,7 +549,7 @@ size = 2.0
         panic!()
     };
     assert_eq!(size, 2.0);
-    assert!((v.x - 32.0).abs() < 1e-12 && (v.y - 24.0).abs() < 1e-12 && v.i == 3.0);
+    assert!((v.x - 32.0).abs() < 1e-12 && (v.y - 24.0).abs() < 1e-12 && v.i == [3.0; 3]);
     assert!((v.z - screen_z(&s.camera, 50.0)).abs() < 1e-12);
 }
 
@@ -597,27 +600,27 @@ size = 3.0
     let v = |x, y, z, i| ScreenVertex { x, y, z, i };
     let expected = vec![
         Primitive::Triangle([
-            v(1.5, 2.25, 0.0, 0.0),
-            v(60.0, 3.0, 0.5, 0.5),
-            v(10.0, 47.0, 1.0, 1.5),
+            v(1.5, 2.25, 0.0, [0.0; 3]),
+            v(60.0, 3.0, 0.5, [0.5; 3]),
+            v(10.0, 47.0, 1.0, [1.5; 3]),
         ]),
         Primitive::Triangle([
-            v(0.0, 0.0, 0.2, 0.1),
-            v(64.0, 0.0, 0.2, 0.2),
-            v(64.0, 48.0, 0.3, 0.3),
+            v(0.0, 0.0, 0.2, [0.1; 3]),
+            v(64.0, 0.0, 0.2, [0.2; 3]),
+            v(64.0, 48.0, 0.3, [0.3; 3]),
         ]),
         Primitive::Triangle([
-            v(0.0, 0.0, 0.2, 0.1),
-            v(64.0, 48.0, 0.3, 0.3),
-            v(0.0, 48.0, 0.3, 0.4),
+            v(0.0, 0.0, 0.2, [0.1; 3]),
+            v(64.0, 48.0, 0.3, [0.3; 3]),
+            v(0.0, 48.0, 0.3, [0.4; 3]),
         ]),
         Primitive::Line {
-            a: v(0.5, 0.5, 0.25, 0.7),
-            b: v(63.5, 40.0, 0.75, 0.7),
+            a: v(0.5, 0.5, 0.25, [0.7; 3]),
+            b: v(63.5, 40.0, 0.75, [0.7; 3]),
             width: 1.0,
         },
         Primitive::Point {
-            v: v(20.5, 30.5, 0.125, 4.0),
+            v: v(20.5, 30.5, 0.125, [4.0; 3]),
             size: 3.0,
         },
     ];
@@ -824,7 +827,12 @@ fn screen_space_and_lens_rules() {
     assert_err(&t, "object[0].intensity[1]", "intensity", "in [0, 1e6]");
     let t = tri("intensity = [1, 1]")
         .replace("vertices = [[0, 0, 0.5], [10, 0, 0.5], [0, 10, 1.5]]", ok);
-    assert_err(&t, "object[0].intensity", "intensity", "3 finite numbers");
+    assert_err(
+        &t,
+        "object[0].intensity",
+        "intensity",
+        "an array of 3 intensities",
+    );
     let t = tri("intensity = [1, 1, 1]\nreflectance = 0.5")
         .replace("vertices = [[0, 0, 0.5], [10, 0, 0.5], [0, 10, 1.5]]", ok);
     assert_err(&t, "object[0].reflectance", "reflectance", "no effect");

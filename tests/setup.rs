@@ -111,7 +111,12 @@ proptest! {
 }
 
 fn qv(x: i64, y: i64, z: i64, i: i64) -> QVertex {
-    QVertex { x, y, z, i }
+    QVertex {
+        x,
+        y,
+        z,
+        i: [i, 0, 0],
+    }
 }
 
 /// An edge of a set-up triangle: (top, bottom, constants, whether it is a left edge).
@@ -344,7 +349,7 @@ fn planes_interpolate_exactly_and_round_gradients_to_nearest() {
         if a == 0 {
             continue;
         }
-        let pl = Plane::new(&vs, |p| p.i);
+        let pl = Plane::new(&vs, |p| p.i[0]);
         let g = (c().rem_euclid(16)) as u32;
         for k in 0..3 {
             assert_eq!(pl.eval(vs[k].x, vs[k].y, g), attr[k] << g, "vertex {k}");
@@ -398,7 +403,7 @@ fn light_points_cover_the_samples_whose_centres_are_in_their_square() {
         let Setup::Point(p) = setup::setup(&QPrim::Point { v, size }, &g, &mut w) else {
             panic!("a point")
         };
-        assert_eq!((w.points, w.triangles, p.z, p.i), (1, 0, 3, 40));
+        assert_eq!((w.points, w.triangles, p.z, p.i[0]), (1, 0, 3, 40));
         // The square [centre - size/2, centre - size/2 + size) in coordinate units.
         for (span, centre) in [(p.c, v.x), (p.k, v.y)] {
             let lo = centre - size / 2;

@@ -131,7 +131,7 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
     let max = h.visibility.z.format.max_code();
     let conv = |z: u32| convert(z, shift, h.visibility.z.quant).min(max) as u32;
     let n = tap.samples.z.len();
-    let (mut z, mut id, mut int) = (vec![u32::MAX; n], vec![0u32; n], vec![prims.bg; n]);
+    let (mut z, mut id, mut int) = (vec![u32::MAX; n], vec![0u32; n], vec![prims.bg[0]; n]);
     let (mut ties, mut wins) = (0, 0);
     for (p, q) in prims.q.iter().enumerate() {
         if matches!(q, QPrim::Point { .. }) {
@@ -141,7 +141,7 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
             let (s, zf) = (f.s as usize, conv(f.z));
             ties += (zf == z[s]) as u64;
             if zf < z[s] {
-                (z[s], id[s], int[s]) = (zf, p as u32 + 1, f.i);
+                (z[s], id[s], int[s]) = (zf, p as u32 + 1, f.i[0]);
                 wins += 1;
             }
         }
@@ -161,7 +161,7 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
                     .filter(|f| conv(f.z) < z[f.s as usize])
                     .map(|f| f.s)
                     .collect();
-                Some((v.i as u32, vis))
+                Some((v.i[0] as u32, vis))
             }
             _ => None,
         })

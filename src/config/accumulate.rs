@@ -56,7 +56,7 @@ pub(super) struct RawAccumulate {
     filter: Option<FilterKind>,
     weight_bits: Option<u32>,
     gaussian_sigma: Option<f64>,
-    pub(super) frame: Option<QFormat>,
+    pub(super) frame: Option<super::PerChannel<QFormat>>,
     quant: Option<Quant>,
     overflow: Option<Overflow>,
 }
@@ -67,7 +67,7 @@ impl RawAccumulate {
         set(&mut c.filter, self.filter);
         set(&mut c.weight_bits, self.weight_bits);
         set(&mut c.gaussian_sigma, self.gaussian_sigma);
-        set(&mut c.frame.format, self.frame);
+        set(&mut c.frame.format, self.frame.map(|f| f.first()));
         set(&mut c.frame.quant, self.quant);
         set(&mut c.frame.overflow, self.overflow);
     }

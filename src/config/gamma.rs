@@ -26,7 +26,7 @@ pub struct GammaCfg {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawGamma {
-    dac_bits: Option<u32>,
+    pub(super) dac_bits: Option<super::PerChannel<u32>>,
     quant: Option<Quant>,
     gamma: Option<f64>,
     correction: Option<bool>,
@@ -35,7 +35,7 @@ pub(super) struct RawGamma {
 impl RawGamma {
     /// Overrides the given fields.
     pub(super) fn apply(self, c: &mut GammaCfg) {
-        set(&mut c.dac_bits, self.dac_bits);
+        set(&mut c.dac_bits, self.dac_bits.map(|d| d.first()));
         set(&mut c.quant, self.quant);
         if self.gamma.is_some() {
             c.gamma = self.gamma;

@@ -21,7 +21,7 @@ pub struct InputCfg {
 pub(super) struct RawInput {
     coord: Option<QFormat>,
     z: Option<QFormat>,
-    pub(super) intensity: Option<QFormat>,
+    pub(super) intensity: Option<super::PerChannel<QFormat>>,
     quant: Option<Quant>,
     overflow: Option<Overflow>,
 }
@@ -35,6 +35,6 @@ impl RawInput {
         }
         set(&mut c.coord.format, self.coord);
         set(&mut c.z.format, self.z);
-        set(&mut c.intensity.format, self.intensity);
+        set(&mut c.intensity.format, self.intensity.map(|f| f.first()));
     }
 }

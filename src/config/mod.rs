@@ -82,6 +82,51 @@ pub struct HwConfig {
     /// ([`HwConfig::error`]).
     #[serde(skip)]
     pub source: Source,
+    /// Per-channel word widths of a colour datapath (`None`: every channel has the widths
+    /// above). See [`HwConfig::channel`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub channels: Option<ChannelWidths>,
+}
+
+/// The word widths of each channel (R, G, B) of a colour datapath: given when the hardware
+/// file writes `input.intensity`, `accumulate.frame` or `gamma.dac_bits` as an array of
+/// three (`accumulate.frame = ["UQ5.0", "UQ6.0", "UQ5.0"]`; a scalar means all three). A
+/// channel's `input.intensity` follows its frame word's integer bits unless given.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ChannelWidths {
+    /// `input.intensity` per channel.
+    pub intensity: [QFormat; 3],
+    /// `accumulate.frame` per channel.
+    pub frame: [QFormat; 3],
+    /// `gamma.dac_bits` per channel.
+    pub dac_bits: [u32; 3],
+}
+
+/// A field that is one value for every channel or an array of three (R, G, B).
+#[derive(Clone, Copy, Debug, serde::Deserialize)]
+#[serde(untagged)]
+pub(crate) enum PerChannel<T> {
+    /// The same value in every channel.
+    One(T),
+    /// One value per channel.
+    Three([T; 3]),
+}
+
+impl<T: Copy> PerChannel<T> {
+    /// Channel 0's value (what the scalar field holds).
+    pub(crate) fn first(&self) -> T {
+        match self {
+            PerChannel::One(v) => *v,
+            PerChannel::Three(v) => v[0],
+        }
+    }
+    /// The three values, when given per channel.
+    pub(crate) fn three(&self) -> Option<[T; 3]> {
+        match self {
+            PerChannel::One(_) => None,
+            PerChannel::Three(v) => Some(*v),
+        }
+    }
 }
 
 /// Overrides `dst` when `v` is given (the overlay's one operation).
@@ -95,6 +140,24 @@ impl HwConfig {
     /// A preset by name.
     pub fn preset(name: &str) -> Option<HwConfig> {
         presets::preset(name)
+    }
+
+    /// Whether the channels have their own word widths (a colour datapath: the pipeline
+    /// renders three channels even for a grey scene).
+    pub fn per_channel(&self) -> bool {
+        self.channels.is_some()
+    }
+
+    /// The configuration of channel `c` (0 R, 1 G, 2 B): these fields with channel `c`'s
+    /// word widths, and no per-channel widths left. What the stages of a channel's lane read.
+    pub fn channel(&self, c: usize) -> HwConfig {
+        let mut hw = self.clone();
+        if let Some(w) = hw.channels.take() {
+            hw.input.intensity.format = w.intensity[c];
+            hw.accumulate.frame.format = w.frame[c];
+            hw.gamma.dac_bits = w.dac_bits[c];
+        }
+        hw
     }
 
     /// The default configuration (`linear12`).
@@ -158,6 +221,15 @@ impl HwConfig {
 
     /// Checks every field; returns the failing field path and a message with the allowed range.
     pub fn validate(&self) -> Result<(), (String, String)> {
+        if self.channels.is_some() {
+            // Every channel's datapath is a whole configuration of its own.
+            for c in 0..3 {
+                self.channel(c)
+                    .validate()
+                    .map_err(|(f, m)| (f, format!("{m} (channel {})", ["R", "G", "B"][c])))?;
+            }
+            return Ok(());
+        }
         let fmt = |field: &str, f: &QFormat| f.validate().map_err(|m| (field.to_string(), m));
         fmt("input.coord", &self.input.coord.format)?;
         fmt("input.z", &self.input.z.format)?;

@@ -44,6 +44,10 @@ pub(super) fn apply_file(file: &TomlFile) -> Result<HwConfig, FileError> {
     hw.name = file.name.clone();
     hw.source = crate::files::Source::file(file, Some(base));
     let intensity_given = raw.input.as_ref().is_some_and(|i| i.intensity.is_some());
+    // Per-channel widths: any of the three fields given as an array of three.
+    let intensity3 = raw.input.as_ref().and_then(|i| i.intensity?.three());
+    let frame3 = raw.accumulate.as_ref().and_then(|a| a.frame?.three());
+    let dac3 = raw.gamma.as_ref().and_then(|g| g.dac_bits?.three());
     if let Some(i) = raw.input {
         i.apply(&mut hw.input);
     }
@@ -75,6 +79,24 @@ pub(super) fn apply_file(file: &TomlFile) -> Result<HwConfig, FileError> {
     }
     if let Some(c) = raw.coding {
         c.apply(&mut hw.coding);
+    }
+    if intensity3.is_some() || frame3.is_some() || dac3.is_some() {
+        let frame = frame3.unwrap_or([hw.accumulate.frame.format; 3]);
+        let intensity = intensity3.unwrap_or_else(|| {
+            // Each channel's vertex intensity follows its frame word's integer bits.
+            frame.map(|f| {
+                let mut i = hw.input.intensity.format;
+                if !intensity_given {
+                    i.int_bits = f.int_bits;
+                }
+                i
+            })
+        });
+        hw.channels = Some(super::ChannelWidths {
+            intensity,
+            frame,
+            dac_bits: dac3.unwrap_or([hw.gamma.dac_bits; 3]),
+        });
     }
     Ok(hw)
 }

@@ -82,5 +82,6 @@ pub fn preset(name: &str) -> Option<HwConfig> {
         },
         coding,
         source: crate::files::Source::preset(name),
+        channels: None,
     })
 }

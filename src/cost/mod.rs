@@ -41,10 +41,11 @@ pub fn summarize(stages: &[StageReport], packed: Vec<PackCheck>) -> CostSummary 
     };
     for s in stages {
         if s.cost.storage_bits > 0 {
-            c.storage_bits.insert(s.name.clone(), s.cost.storage_bits);
+            // A colour render's lanes add their channel's memories to the stage's.
+            *c.storage_bits.entry(s.name.clone()).or_default() += s.cost.storage_bits;
         }
         if s.cost.lut_bits > 0 {
-            c.rom_bits.insert(s.name.clone(), s.cost.lut_bits);
+            *c.rom_bits.entry(s.name.clone()).or_default() += s.cost.lut_bits;
         }
         c.total_storage_bits += s.cost.storage_bits;
         c.total_rom_bits += s.cost.lut_bits;

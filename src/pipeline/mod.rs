@@ -9,6 +9,7 @@
 
 pub mod bands;
 pub mod cache;
+pub mod colour;
 pub mod estimate;
 pub mod plan;
 pub mod report;
@@ -47,6 +48,16 @@ pub struct Render {
     pub workload: Workload,
     /// Per pixel: 0 not smooth, 1 smooth, 2 next to a visible contour step.
     pub contour_map: Vec<u8>,
+    /// The channels of a colour render (`None`: grey, `dac` is the image).
+    pub colour: Option<ColourRender>,
+}
+
+/// The channels of a colour render.
+pub struct ColourRender {
+    /// Each channel's DAC codes, R, G, B (R's equal [`Render::dac`]).
+    pub channels: Vec<colour::ChannelCodes>,
+    /// The steps after visibility of channels 1.. (channel 0's are in [`Render::steps`]).
+    pub lanes: Vec<Vec<Step>>,
 }
 
 impl Render {
@@ -104,28 +115,50 @@ fn render_on_pool(
 ) -> Result<Render> {
     let plan = plan::build(scene, hw)?;
     check_memory(scene, &plan, opts)?;
-    let steps = run::run(scene, hw, &plan, opts, cache, None)?;
-    let taps = &steps.last().expect("a plan runs stages").outcome.taps;
-    let px = taps.fixed.pixels();
-    let dac: Vec<u16> = px.codes.iter().map(|&c| c as u16).collect();
-    let dac_ref: Vec<u16> = match taps.float.pixels() {
-        crate::stage::PixelTapF::Codes(c) => c.iter().map(|&c| c as u16).collect(),
-        crate::stage::PixelTapF::Values(_) => {
-            unreachable!("the last stage writes DAC codes")
-        }
-    };
-    let ideal = report::ideal(scene, hw, &steps, cache);
+    let channels = plan.layout.channels;
+    if channels > 1 && opts.dof_truth_samples > 0 {
+        return Err(crate::error::Error::File(scene.error(
+            "image.colour",
+            "the depth-of-field truth (--dof-truth) of a colour render is not modelled yet: render a grey scene (colour = false) for the truth",
+        )));
+    }
+    let (steps, lanes) = run::run_lanes(scene, hw, &plan, opts, cache, None)?;
+    // Channel 0's configuration: the report's end-to-end figures are its lane's.
+    let hw0 = hw.channel(0);
+    let (dac, dac_ref) = colour::dac_codes(&steps);
+    let ideal = report::ideal(scene, &hw0, &steps, cache);
     let (mut report, workload, contour_map) = report::build(
         scene,
-        hw,
+        &hw0,
         &plan,
-        &steps,
+        (&steps, &lanes),
         &dac,
         &dac_ref,
         &ideal.ideal,
         cache,
         opts,
     );
+    report.hardware = hw.clone();
+    let colour = (channels > 1).then(|| {
+        let split = steps.len() - lanes[0].len();
+        let mut codes = Vec::with_capacity(channels);
+        let mut reports = Vec::with_capacity(channels);
+        for c in 0..channels {
+            let lane = if c == 0 {
+                &steps[split..]
+            } else {
+                &lanes[c - 1][..]
+            };
+            let (k, r) = colour::channel(scene, &hw.channel(c), c, lane, cache);
+            codes.push(k);
+            reports.push(r);
+        }
+        report.colour = Some(colour::ColourReport { channels: reports });
+        ColourRender {
+            channels: codes,
+            lanes,
+        }
+    });
     let (dof_truth, truth_dac) =
         match truth::report(scene, hw, &plan, &steps, &dac, &dac_ref, cache, opts)? {
             Some((r, d)) => (Some(r), Some(d)),
@@ -142,6 +175,7 @@ fn render_on_pool(
         dac_bits: hw.gamma.dac_bits,
         workload,
         contour_map,
+        colour,
     })
 }
 

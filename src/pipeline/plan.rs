@@ -114,6 +114,16 @@ fn too_narrow(scene: &Scene, hw: &HwConfig, max: f64, need: f64) -> FileError {
     }
 }
 
+/// Intensity channels of a render: 3 (R, G, B) for a colour scene or for hardware with
+/// per-channel word widths, else 1 (grey).
+pub fn channels(scene: &Scene, hw: &HwConfig) -> usize {
+    if scene.channels() == 3 || hw.per_channel() {
+        3
+    } else {
+        1
+    }
+}
+
 /// Which stages run, in which order, with every decision.
 pub fn decide(scene: &Scene, hw: &HwConfig) -> Result<(Vec<Decision>, Vec<StageId>)> {
     let mut decisions = Vec::new();
@@ -175,6 +185,7 @@ pub fn build(scene: &Scene, hw: &HwConfig) -> Result<Plan> {
             tiles,
             order,
             band: None,
+            channels: channels(scene, hw),
         },
         host: Arc::new(host),
         host_ms,

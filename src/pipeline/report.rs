@@ -92,6 +92,11 @@ pub struct Report {
     /// The errors against the depth-of-field truth (`render --dof-truth`, a thin lens only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dof_truth: Option<crate::truth::TruthReport>,
+    /// The channels of a colour render (`None`: grey). The figures above are channel 0's
+    /// (R) except the totals (overflows, storage, LUT bits, the cost summary), which count
+    /// every channel's lane.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub colour: Option<super::colour::ColourReport>,
 }
 
 /// The ideal image the contour metric reads (from the float frame before the gamma stage
@@ -167,7 +172,7 @@ pub(super) fn build(
     scene: &Scene,
     hw: &HwConfig,
     plan: &Plan,
-    steps: &[Step],
+    (steps, lanes): (&[Step], &[Vec<Step>]),
     dac: &[u16],
     dac_ref: &[u16],
     ideal: &IdealImage,
@@ -180,14 +185,17 @@ pub(super) fn build(
     let weber = compare::weber(dac, dac_ref, &display);
     let contours = perceptual::contours(dac, dac_ref, ideal, &display);
     let stages: Vec<StageReport> = steps.iter().map(|s| s.outcome.report.clone()).collect();
-    let overflows = stages
+    // Totals over every channel's lane.
+    let every: Vec<&Step> = steps.iter().chain(lanes.iter().flatten()).collect();
+    let all: Vec<StageReport> = every.iter().map(|s| s.outcome.report.clone()).collect();
+    let overflows = all
         .iter()
         .flat_map(|s| &s.signals)
         .map(|s| s.overflows)
         .sum();
-    let storage_bits = stages.iter().map(|s| s.cost.storage_bits).sum();
-    let lut_bits = stages.iter().map(|s| s.cost.lut_bits).sum();
-    let packed = steps
+    let storage_bits = all.iter().map(|s| s.cost.storage_bits).sum();
+    let lut_bits = all.iter().map(|s| s.cost.lut_bits).sum();
+    let packed = every
         .iter()
         .flat_map(|s| s.outcome.packs.iter().cloned())
         .collect();
@@ -207,7 +215,7 @@ pub(super) fn build(
         plan.order(),
         hw.cycles.clock_mhz,
         scene.display.refresh_hz,
-        cost::summarize(&stages, packed),
+        cost::summarize(&all, packed),
         sim,
         wall,
     );
@@ -243,6 +251,7 @@ pub(super) fn build(
         cycles,
         contours: contours.report,
         dof_truth: None,
+        colour: None,
     };
     (report, workload, contours.map)
 }

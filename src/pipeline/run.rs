@@ -45,7 +45,8 @@ pub struct Step {
     pub reused: bool,
 }
 
-/// Runs the plan's stages in order, through `last` (all when `None`).
+/// Runs the plan's stages in order, through `last` (all when `None`): channel 0's steps
+/// (a grey render's only ones). See [`run_lanes`] for the other channels of a colour render.
 pub fn run(
     scene: &Scene,
     hw: &HwConfig,
@@ -54,85 +55,172 @@ pub fn run(
     cache: Option<&Cache>,
     last: Option<StageId>,
 ) -> Result<Vec<Step>> {
+    run_lanes(scene, hw, plan, opts, cache, last).map(|(steps, _)| steps)
+}
+
+/// Runs the plan's stages in order, through `last` (all when `None`). The geometry stages
+/// (input to visibility) run once and carry every channel; for a colour render the stages
+/// after visibility then run once per channel, each on its channel's samples with its
+/// channel's word widths ([`HwConfig::channel`]): channel 0's steps come first (with the
+/// geometry's), then the steps after visibility of channels 1.. (one list each).
+pub fn run_lanes(
+    scene: &Scene,
+    hw: &HwConfig,
+    plan: &Plan,
+    opts: RunOptions,
+    cache: Option<&Cache>,
+    last: Option<StageId>,
+) -> Result<(Vec<Step>, Vec<Vec<Step>>)> {
     let memo: &dyn Memo = match cache {
         Some(c) => c,
         None => &NoMemo,
     };
-    let mut taps = Taps {
+    let taps = Taps {
         host: Some(plan.host.clone()),
         ..Taps::default()
     };
-    let mut key = plan.key;
-    let mut steps = Vec::with_capacity(plan.order().len());
-    let band_rows = super::bands::rows(plan, opts);
     let order = plan.order();
-    let mut at = 0;
-    while at < order.len() {
-        let id = order[at];
-        let stage = stage::get(id);
-        let cx = Cx {
-            scene,
-            hw,
-            layout: &plan.layout,
-            opts,
-            input_key: key,
-            memo,
+    let channels = plan.layout.channels;
+    let split = if channels > 1 {
+        order
+            .iter()
+            .position(|&s| s == StageId::Visibility)
+            .map_or(order.len(), |v| v + 1)
+    } else {
+        order.len()
+    };
+    let band_rows = super::bands::rows(plan, opts);
+    if channels > 1 && band_rows.is_some() {
+        return Err(crate::error::Error::File(scene.error(
+            "image.width, image.height",
+            "a colour render of a screen this large would run raster, visibility and accumulate in bands of rows, which do not carry channels yet; use a smaller screen or a grey scene",
+        )));
+    }
+    let mut run = Runner {
+        scene,
+        plan,
+        opts,
+        cache,
+        memo,
+        last,
+        band_rows,
+    };
+    let mut steps = Vec::with_capacity(order.len());
+    let (taps, key, done) = run.stages(hw, &order[..split], taps, plan.key, &mut steps)?;
+    if done || split == order.len() {
+        return Ok((steps, Vec::new()));
+    }
+    let mut lanes = Vec::with_capacity(channels - 1);
+    for c in 0..channels {
+        let lane_hw = hw.channel(c);
+        let lane_key = if c == 0 {
+            key
+        } else {
+            Fnv::new().u64(key).str("channel").u64(c as u64).finish()
         };
-        let k = stage_key(stage, &cx, key, opts);
-        if let Some(rows) = band_rows.filter(|_| super::bands::is_banded(id)) {
-            // Raster, visibility and accumulate, band by band (see `bands`).
-            let group: Vec<StageId> = order[at..]
-                .iter()
-                .copied()
-                .take_while(|&s| super::bands::is_banded(s))
-                .collect();
-            if let Some(l) = last.filter(|l| group.contains(l) && *l != StageId::Accumulate) {
-                return Err(banded_tap(scene, l, rows));
-            }
-            let (mut ins, mut keys) = (vec![key], vec![k]);
-            for &g in &group[1..] {
-                let cx = Cx {
-                    input_key: keys[keys.len() - 1],
-                    ..cx
-                };
-                ins.push(cx.input_key);
-                keys.push(stage_key(stage::get(g), &cx, cx.input_key, opts));
-            }
-            let outs = super::bands::run(&group, scene, hw, plan, opts, memo, &ins, &taps, rows)?;
-            for ((&g, &gk), o) in group.iter().zip(&keys).zip(outs) {
-                taps = o.taps.clone();
-                key = gk;
-                steps.push(Step {
-                    id: g,
-                    key: gk,
-                    outcome: Arc::new(o),
-                    reused: false,
-                });
-            }
-            at += group.len();
-            if last.is_some_and(|l| group.contains(&l)) {
-                break;
-            }
-            continue;
-        }
-        at += 1;
-        let (outcome, reused) = match cache {
-            Some(c) => c.stage(k, || execute(stage, &cx, &taps))?,
-            None => (Arc::new(execute(stage, &cx, &taps)?), false),
-        };
-        taps = outcome.taps.clone();
-        key = k;
-        steps.push(Step {
-            id,
-            key: k,
-            outcome,
-            reused,
-        });
-        if last == Some(id) {
-            break;
+        let mut lane = Vec::new();
+        run.stages(&lane_hw, &order[split..], taps.lane(c), lane_key, &mut lane)?;
+        if c == 0 {
+            steps.extend(lane);
+        } else {
+            lanes.push(lane);
         }
     }
-    Ok(steps)
+    Ok((steps, lanes))
+}
+
+/// What every stage of one run shares.
+struct Runner<'a> {
+    scene: &'a Scene,
+    plan: &'a Plan,
+    opts: RunOptions,
+    cache: Option<&'a Cache>,
+    memo: &'a dyn Memo,
+    last: Option<StageId>,
+    band_rows: Option<u32>,
+}
+
+impl Runner<'_> {
+    /// Runs `order` from `taps` (the taps after the stage keyed `key`) into `steps`; returns
+    /// the taps and key after the last stage run and whether `last` was reached.
+    fn stages(
+        &mut self,
+        hw: &HwConfig,
+        order: &[StageId],
+        mut taps: Taps,
+        mut key: u64,
+        steps: &mut Vec<Step>,
+    ) -> Result<(Taps, u64, bool)> {
+        let (scene, plan, opts, last) = (self.scene, self.plan, self.opts, self.last);
+        let mut at = 0;
+        while at < order.len() {
+            let id = order[at];
+            let stage = stage::get(id);
+            let cx = Cx {
+                scene,
+                hw,
+                layout: &plan.layout,
+                opts,
+                input_key: key,
+                memo: self.memo,
+            };
+            let k = stage_key(stage, &cx, key, opts);
+            if let Some(rows) = self.band_rows.filter(|_| super::bands::is_banded(id)) {
+                // Raster, visibility and accumulate, band by band (see `bands`).
+                let group: Vec<StageId> = order[at..]
+                    .iter()
+                    .copied()
+                    .take_while(|&s| super::bands::is_banded(s))
+                    .collect();
+                if let Some(l) = last.filter(|l| group.contains(l) && *l != StageId::Accumulate) {
+                    return Err(banded_tap(scene, l, rows));
+                }
+                let (mut ins, mut keys) = (vec![key], vec![k]);
+                for &g in &group[1..] {
+                    let cx = Cx {
+                        input_key: keys[keys.len() - 1],
+                        ..cx
+                    };
+                    ins.push(cx.input_key);
+                    keys.push(stage_key(stage::get(g), &cx, cx.input_key, opts));
+                }
+                let outs =
+                    super::bands::run(&group, scene, hw, plan, opts, self.memo, &ins, &taps, rows)?;
+                for ((&g, &gk), o) in group.iter().zip(&keys).zip(outs) {
+                    taps = o.taps.clone();
+                    key = gk;
+                    steps.push(Step {
+                        id: g,
+                        key: gk,
+                        outcome: Arc::new(o),
+                        reused: false,
+                    });
+                }
+                at += group.len();
+                if last.is_some_and(|l| group.contains(&l)) {
+                    return Ok((taps, key, true));
+                }
+                continue;
+            }
+            at += 1;
+            let (outcome, reused) = match self.cache {
+                Some(c) => c.stage(k, || execute(stage, &cx, &taps))?,
+                None => (Arc::new(execute(stage, &cx, &taps)?), false),
+            };
+            taps = outcome.taps.clone();
+            key = k;
+            steps.push(Step {
+                id,
+                key: k,
+                outcome,
+                reused,
+            });
+            if last == Some(id) {
+                return Ok((taps, key, true));
+            }
+        }
+        Ok((taps, key, false))
+    }
 }
 
 /// A stage's key: its key material chained with its input's key and the options.

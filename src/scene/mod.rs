@@ -65,10 +65,15 @@ pub const MAX_GUARD_BAND: u32 = 4096;
 /// bounds the host's and the pipeline's per-primitive memory (a few hundred bytes each).
 pub const MAX_PRIMITIVES: u64 = 1 << 22;
 
+/// A linear RGB triple (R, G, B): a colour or an intensity per channel. A grey value is
+/// three equal components.
+pub type Rgb = [f64; 3];
+
 /// Embedded scenes by name: `(name, TOML text)`. [`Scene::embedded`] looks names up here.
 pub const EMBEDDED: &[(&str, &str)] = &[
     ("default", include_str!("default.toml")),
     ("cone-focus", include_str!("cone-focus.toml")),
+    ("default-colour", include_str!("default-colour.toml")),
 ];
 
 /// A whole scene: what to draw, how to look at it and on which display.
@@ -100,8 +105,11 @@ pub struct ImageSpec {
     pub width: u32,
     /// Height in pixels, `1..=MAX_RESOLUTION`.
     pub height: u32,
-    /// Linear intensity of the background at infinity, in `[0, 1]` (default 0).
-    pub background: f64,
+    /// Linear intensity of the background at infinity, each channel in `[0, 1]` (default 0).
+    pub background: Rgb,
+    /// Whether the scene is rendered in colour (three channels, R, G, B): `[image] colour`,
+    /// by default true when any colour of the file is given as an `[r, g, b]` array.
+    pub colour: bool,
 }
 
 /// The display model (`[display]`, every field optional).
@@ -210,31 +218,31 @@ impl Default for Shading {
 pub struct Light {
     /// Direction towards the light, world space, normalised on load.
     pub direction: [f64; 3],
-    /// Intensity I_l, in `[0, MAX_INTENSITY]` (default 1).
-    pub intensity: f64,
+    /// Intensity I_l per channel, in `[0, MAX_INTENSITY]` (default 1: white).
+    pub intensity: Rgb,
 }
 
 /// Surface reflection parameters; flat fields of an `[[object]]`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Material {
-    /// Diffuse reflectance c_r, in `[0, 1]` (default 0.8).
-    pub reflectance: f64,
+    /// Diffuse reflectance c_r per channel, in `[0, 1]` (default 0.8).
+    pub reflectance: Rgb,
     /// Specular coefficient, in `[0, MAX_INTENSITY]` (default 0).
     pub specular: f64,
     /// Blinn-Phong exponent p, in `(0, 1e6]` (default 20).
     pub shininess: f64,
-    /// Intensity added unshaded, in `[0, MAX_INTENSITY]` (default 0).
-    pub emissive: f64,
+    /// Intensity added unshaded per channel, in `[0, MAX_INTENSITY]` (default 0).
+    pub emissive: Rgb,
 }
 
 impl Default for Material {
     /// Reflectance 0.8, no specular, shininess 20, not emissive.
     fn default() -> Self {
         Self {
-            reflectance: 0.8,
+            reflectance: [0.8; 3],
             specular: 0.0,
             shininess: 20.0,
-            emissive: 0.0,
+            emissive: [0.0; 3],
         }
     }
 }
@@ -322,7 +330,7 @@ pub enum Object {
         vertices: [[f64; 3]; 3],
         /// Per-vertex intensity (in `[0, MAX_INTENSITY]`), unshaded; required in screen space.
         /// `None`: shaded with `material` and the face normal turned towards the eye.
-        intensity: Option<[f64; 3]>,
+        intensity: Option<[Rgb; 3]>,
         /// Surface (used only when `intensity` is `None`).
         material: Material,
     },
@@ -333,7 +341,7 @@ pub enum Object {
         /// The vertices, in order around the quad.
         vertices: [[f64; 3]; 4],
         /// Per-vertex intensity (in `[0, MAX_INTENSITY]`); required in screen space.
-        intensity: Option<[f64; 4]>,
+        intensity: Option<[Rgb; 4]>,
         /// Surface (used only when `intensity` is `None`); each half is shaded with its own
         /// face normal.
         material: Material,
@@ -346,8 +354,8 @@ pub enum Object {
         from: [f64; 3],
         /// Second end point.
         to: [f64; 3],
-        /// Intensity, in `[0, MAX_INTENSITY]`, unshaded.
-        intensity: f64,
+        /// Intensity per channel, in `[0, MAX_INTENSITY]`, unshaded.
+        intensity: Rgb,
         /// Width in pixels, in `(0, 2 (diagonal + 2 MAX_GUARD_BAND)]` (default 1).
         width: f64,
     },
@@ -357,8 +365,8 @@ pub enum Object {
         space: Space,
         /// Position.
         position: [f64; 3],
-        /// Intensity, in `[0, MAX_INTENSITY]`, unshaded.
-        intensity: f64,
+        /// Intensity per channel, in `[0, MAX_INTENSITY]`, unshaded.
+        intensity: Rgb,
         /// Size in pixels, in `(0, 2 (diagonal + 2 MAX_GUARD_BAND)]` (default 1).
         size: f64,
     },
@@ -384,6 +392,11 @@ impl Scene {
         let (n, text) = EMBEDDED.iter().find(|(n, _)| *n == name)?;
         let file = TomlFile::from_text(&format!("<embedded scene {n}>"), text);
         Self::from_toml(&file).ok()
+    }
+
+    /// Channels the scene renders: 3 (R, G, B) for a colour scene, else 1 (grey).
+    pub fn channels(&self) -> usize {
+        if self.image.colour { 3 } else { 1 }
     }
 
     /// Parses and validates a scene file. Every error names the line, the field and the
@@ -420,8 +433,9 @@ pub struct ScreenVertex {
     pub y: f64,
     /// Screen depth in `[0, 1]`, affine in screen space (0 = near, 1 = far).
     pub z: f64,
-    /// Linear intensity (1.0 = full white; may exceed 1, the pipeline saturates).
-    pub i: f64,
+    /// Linear intensity per channel (1.0 = full white; may exceed 1, the pipeline
+    /// saturates). A grey scene has three equal channels and renders channel 0 only.
+    pub i: Rgb,
 }
 
 /// A screen-space primitive for the fixed-point pipeline.
@@ -516,8 +530,10 @@ pub struct HostScene {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Background intensity (at infinity, z = 1 beyond everything).
-    pub background: f64,
+    /// Background intensity per channel (at infinity, z = 1 beyond everything).
+    pub background: Rgb,
+    /// Channels the pipeline renders: 1 (grey, channel 0) or 3 (R, G, B).
+    pub channels: usize,
     /// Primitives in deterministic order (object order, then tessellation order).
     pub prims: Vec<Primitive>,
     /// Work counts.

@@ -5,8 +5,8 @@ use super::shade::shade_vertex;
 use super::tessellate::tessellate;
 use super::vec3::{V3, add, cross, dot, lerp3, normalize, scale, sub};
 use super::{
-    Camera, FrontEndStats, GuardBand, HostScene, Material, Object, Primitive, Scene, ScreenVertex,
-    Space,
+    Camera, FrontEndStats, GuardBand, HostScene, Material, Object, Primitive, Rgb, Scene,
+    ScreenVertex, Space,
 };
 
 /// Screen depth of a view-space depth d (distance along the view axis):
@@ -99,7 +99,7 @@ impl View {
 
     /// A screen-space vertex (x, y in pixels, z screen depth) as seen through the lens
     /// point: moved by the parallax of its depth, `f_px (a, -b) (1/focus - 1/d)`.
-    fn screen_vertex(&self, p: V3, i: f64) -> ScreenVertex {
+    fn screen_vertex(&self, p: V3, i: Rgb) -> ScreenVertex {
         let mut v = sv(p, i);
         if let Some(l) = self.lens {
             let k = self.focal_px * (1.0 / l.focus - 1.0 / d_of(self.near, self.far, v.z));
@@ -116,7 +116,7 @@ impl View {
     }
 
     /// View space (d >= near) -> screen.
-    fn project(&self, v: V3, i: f64) -> ScreenVertex {
+    fn project(&self, v: V3, i: Rgb) -> ScreenVertex {
         let inv = 1.0 / v[2];
         ScreenVertex {
             x: self.cx + self.focal_px * v[0] * inv,
@@ -131,7 +131,7 @@ impl View {
 #[derive(Clone, Copy)]
 struct Vv {
     p: V3,
-    i: f64,
+    i: Rgb,
 }
 
 /// Sutherland–Hodgman against `d >= bound` (`keep_far`) or `d <= bound`, in view space.
@@ -156,7 +156,7 @@ fn clip_depth(poly: &[Vv], bound: f64, keep_far: bool) -> Vec<Vv> {
             p[2] = bound;
             out.push(Vv {
                 p,
-                i: a.i + t * (b.i - a.i),
+                i: lerp3(a.i, b.i, t),
             });
         }
     }
@@ -168,7 +168,7 @@ fn lerp(a: &ScreenVertex, b: &ScreenVertex, t: f64) -> ScreenVertex {
         x: a.x + t * (b.x - a.x),
         y: a.y + t * (b.y - a.y),
         z: a.z + t * (b.z - a.z),
-        i: a.i + t * (b.i - a.i),
+        i: lerp3(a.i, b.i, t),
     }
 }
 
@@ -266,7 +266,7 @@ impl Out<'_> {
     }
 
     /// A world-space triangle (already shaded and culled): near/far clip, project, guard clip.
-    fn world_triangle(&mut self, p: [V3; 3], i: [f64; 3]) {
+    fn world_triangle(&mut self, p: [V3; 3], i: [Rgb; 3]) {
         let poly: Vec<Vv> = (0..3)
             .map(|k| Vv {
                 p: self.view.to_view(p[k]),
@@ -291,7 +291,7 @@ impl Out<'_> {
         self.screen_polygon(screen);
     }
 
-    fn line(&mut self, space: Space, from: V3, to: V3, intensity: f64, width: f64) {
+    fn line(&mut self, space: Space, from: V3, to: V3, intensity: Rgb, width: f64) {
         let (a, b) = match space {
             Space::Screen => (
                 self.view.screen_vertex(from, intensity),
@@ -361,7 +361,7 @@ impl Out<'_> {
         self.stats.lines += 1;
     }
 
-    fn point(&mut self, space: Space, position: V3, intensity: f64, size: f64) {
+    fn point(&mut self, space: Space, position: V3, intensity: Rgb, size: f64) {
         let v = match space {
             Space::Screen => self.view.screen_vertex(position, intensity),
             Space::World => {
@@ -379,7 +379,7 @@ impl Out<'_> {
     }
 }
 
-fn sv(p: V3, i: f64) -> ScreenVertex {
+fn sv(p: V3, i: Rgb) -> ScreenVertex {
     ScreenVertex {
         x: p[0],
         y: p[1],
@@ -432,13 +432,13 @@ pub fn front_end_through(scene: &Scene, guard: &GuardBand, lens: Option<LensPoin
             | Object::Cylinder { material, .. } => {
                 let mesh = tessellate(object).expect("canonical objects tessellate");
                 out.stats.triangles_in += mesh.triangles.len();
-                let front: Vec<f64> = mesh
+                let front: Vec<Rgb> = mesh
                     .positions
                     .iter()
                     .zip(&mesh.normals)
                     .map(|(p, n)| shade(*p, *n, material))
                     .collect();
-                let back: Vec<f64> = if mesh.closed {
+                let back: Vec<Rgb> = if mesh.closed {
                     Vec::new()
                 } else {
                     mesh.positions
@@ -510,6 +510,7 @@ pub fn front_end_through(scene: &Scene, guard: &GuardBand, lens: Option<LensPoin
         width: scene.image.width,
         height: scene.image.height,
         background: scene.image.background,
+        channels: scene.channels(),
         prims: out.prims,
         stats: out.stats,
     }
@@ -519,13 +520,13 @@ fn raw_triangle(
     out: &mut Out,
     space: Space,
     v: [V3; 3],
-    intensity: Option<[f64; 3]>,
+    intensity: Option<[Rgb; 3]>,
     material: &Material,
-    shade: &dyn Fn(V3, V3, &Material) -> f64,
+    shade: &dyn Fn(V3, V3, &Material) -> Rgb,
 ) {
     match space {
         Space::Screen => {
-            let i = intensity.unwrap_or([0.0; 3]);
+            let i = intensity.unwrap_or([[0.0; 3]; 3]);
             let poly = (0..3).map(|k| out.view.screen_vertex(v[k], i[k])).collect();
             out.screen_polygon(poly);
         }

@@ -1,9 +1,9 @@
 //! Per-vertex shading in f64 (docs/reference.md §5): Lambert plus Blinn-Phong.
 
 use super::vec3::{add, dot, normalize, sub};
-use super::{Light, Material};
+use super::{Light, Material, Rgb};
 
-/// Linear intensity of a surface point:
+/// Linear intensity of a surface point, per channel (R, G, B; a grey scene's three are equal):
 ///
 /// `i = emissive + reflectance * (ambient + Σ_l I_l·max(0, n·l))
 ///        + specular * Σ_l I_l·max(0, n·h)^shininess`
@@ -21,21 +21,28 @@ pub fn shade_vertex(
     material: &Material,
     ambient: f64,
     lights: &[Light],
-) -> f64 {
+) -> Rgb {
     let n = normalize(normal);
     let e = normalize(sub(eye, position));
-    let mut diffuse = ambient;
-    let mut spec = 0.0;
+    let mut diffuse = [ambient; 3];
+    let mut spec = [0.0; 3];
     for light in lights {
         let l = light.direction;
-        diffuse += light.intensity * dot(n, l).max(0.0);
-        if material.specular != 0.0 {
+        let lambert = dot(n, l).max(0.0);
+        let phong = if material.specular != 0.0 {
             let s = add(e, l);
-            if dot(s, s) > 1e-24 {
-                let h = normalize(s);
-                spec += light.intensity * dot(n, h).max(0.0).powf(material.shininess);
+            (dot(s, s) > 1e-24).then(|| dot(n, normalize(s)).max(0.0).powf(material.shininess))
+        } else {
+            None
+        };
+        for c in 0..3 {
+            diffuse[c] += light.intensity[c] * lambert;
+            if let Some(p) = phong {
+                spec[c] += light.intensity[c] * p;
             }
         }
     }
-    material.emissive + material.reflectance * diffuse + material.specular * spec
+    std::array::from_fn(|c| {
+        material.emissive[c] + material.reflectance[c] * diffuse[c] + material.specular * spec[c]
+    })
 }

@@ -25,8 +25,8 @@ pub struct QVertex {
     pub y: i64,
     /// Depth code.
     pub z: i64,
-    /// Intensity code.
-    pub i: i64,
+    /// Intensity code per channel (channels beyond the render's are 0).
+    pub i: [i64; 3],
 }
 
 /// A quantised primitive.
@@ -55,6 +55,7 @@ pub enum QPrim {
 /// The quantiser set of the stage with its instrumentation.
 struct Quantizers<'a> {
     hw: &'a HwConfig,
+    channels: usize,
     x: SignalStats,
     y: SignalStats,
     z: SignalStats,
@@ -88,24 +89,16 @@ impl Quantizers<'_> {
     fn vertex(&mut self, v: &ScreenVertex) -> Result<QVertex> {
         let c = &self.hw.input.coord;
         let scale = (1u64 << c.format.frac_bits) as f64;
-        let white = self.white();
         let zs = (1u64 << self.hw.input.z.format.frac_bits) as f64;
-        let is = (1u64 << self.hw.input.intensity.format.frac_bits) as f64;
-        Ok(QVertex {
-            x: Self::one(c, &mut self.x, &mut self.local, v.x * scale)?,
-            y: Self::one(c, &mut self.y, &mut self.local, v.y * scale)?,
-            z: Self::one(&self.hw.input.z, &mut self.z, &mut self.local, v.z * zs)?,
-            i: Self::one(
-                &self.hw.input.intensity,
-                &mut self.i,
-                &mut self.local,
-                v.i * white * is,
-            )?,
-        })
-    }
-
-    fn white(&self) -> f64 {
-        ((1u64 << self.hw.input.intensity.format.int_bits) - 1) as f64
+        let x = Self::one(c, &mut self.x, &mut self.local, v.x * scale)?;
+        let y = Self::one(c, &mut self.y, &mut self.local, v.y * scale)?;
+        let z = Self::one(&self.hw.input.z, &mut self.z, &mut self.local, v.z * zs)?;
+        let mut i = [0; 3];
+        for (k, code) in i.iter_mut().enumerate().take(self.channels) {
+            let q = intensity_quantizer(self.hw, k);
+            *code = Self::one(&q, &mut self.i, &mut self.local, v.i[k] * white_lsb(&q))?;
+        }
+        Ok(QVertex { x, y, z, i })
     }
 
     fn length(&mut self, px: f64) -> i64 {
@@ -139,10 +132,12 @@ pub struct Quantized {
     pub vertices: u64,
 }
 
-/// Fixed model: quantises every primitive of the host scene.
-pub fn quantize(host: &HostScene, hw: &HwConfig) -> Result<Quantized> {
+/// Fixed model: quantises every primitive of the host scene (the intensity of `channels`
+/// channels).
+pub fn quantize(host: &HostScene, hw: &HwConfig, channels: usize) -> Result<Quantized> {
     let mut qs = Quantizers {
         hw,
+        channels,
         x: SignalStats::new("input.x", hw.input.coord.format),
         y: SignalStats::new("input.y", hw.input.coord.format),
         z: SignalStats::new("input.z", hw.input.z.format),
@@ -185,29 +180,38 @@ pub fn vertices_of(p: &Primitive) -> u32 {
     }
 }
 
-/// Full white in intensity-format integer codes.
-fn white_i(hw: &HwConfig) -> f64 {
-    ((1u64 << hw.input.intensity.format.int_bits) - 1) as f64
+/// Channel `c`'s vertex-intensity quantiser (`input.intensity`, or the channel's own width).
+pub fn intensity_quantizer(hw: &HwConfig, c: usize) -> Quantizer {
+    let mut q = hw.input.intensity;
+    if let Some(w) = &hw.channels {
+        q.format = w.intensity[c];
+    }
+    q
 }
 
-/// The background's intensity code (quantised like a vertex intensity).
-pub fn background_code(host: &HostScene, hw: &HwConfig) -> u32 {
-    let q = hw.input.intensity;
-    let white = white_i(hw) * (1u64 << q.format.frac_bits) as f64;
-    q.quantize_f64(host.background * white * q.format.lsb())
-        .code as u32
+/// Full white in LSBs of the intensity quantiser `q` (`2^int_bits - 1` integer codes).
+fn white_lsb(q: &Quantizer) -> f64 {
+    ((1u64 << q.format.int_bits) - 1) as f64 * (1u64 << q.format.frac_bits) as f64
+}
+
+/// The background's intensity code per channel (quantised like a vertex intensity).
+pub fn background_code(host: &HostScene, hw: &HwConfig) -> [u32; 3] {
+    std::array::from_fn(|c| {
+        let q = intensity_quantizer(hw, c);
+        q.quantize_f64(host.background[c] * white_lsb(&q) * q.format.lsb())
+            .code as u32
+    })
 }
 
 /// Float reference: the host primitive in the fixed formats' units (no rounding).
 pub fn fprim(p: &Primitive, hw: &HwConfig) -> FPrim {
-    let i_fmt = hw.input.intensity.format;
-    let white = white_i(hw) * (1u64 << i_fmt.frac_bits) as f64;
+    let white: [f64; 3] = std::array::from_fn(|c| white_lsb(&intensity_quantizer(hw, c)));
     let z_scale = (1u64 << hw.input.z.format.frac_bits) as f64;
     let v = |v: &ScreenVertex| FVertex {
         x: v.x,
         y: v.y,
         z: v.z * z_scale,
-        i: v.i * white,
+        i: std::array::from_fn(|c| v.i[c] * white[c]),
     };
     match p {
         Primitive::Triangle(t) => FPrim::Triangle([v(&t[0]), v(&t[1]), v(&t[2])]),
@@ -227,8 +231,7 @@ pub fn fprim(p: &Primitive, hw: &HwConfig) -> FPrim {
 /// background's intensity in intensity LSBs, unrounded.
 pub fn float_prims(host: &HostScene, hw: &HwConfig) -> PrimsF {
     let f = host.prims.iter().map(|p| fprim(p, hw)).collect();
-    let i_fmt = hw.input.intensity.format;
-    let bg = host.background * white_i(hw) * (1u64 << i_fmt.frac_bits) as f64;
+    let bg = std::array::from_fn(|c| host.background[c] * white_lsb(&intensity_quantizer(hw, c)));
     PrimsF { f, bg }
 }
 
@@ -331,12 +334,16 @@ impl Stage for Input {
     }
 
     fn key(&self, cx: &Cx) -> serde_json::Value {
-        serde_json::json!({"input": cx.hw.section("input"), "guard_band": cx.hw.raster.guard_band})
+        serde_json::json!({
+            "input": cx.hw.section("input"),
+            "guard_band": cx.hw.raster.guard_band,
+            "channels": cx.layout.channels,
+        })
     }
 
     fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(Self::Fixed, Facts)> {
         let host = taps.host();
-        let q = quantize(host, cx.hw)?;
+        let q = quantize(host, cx.hw, cx.layout.channels)?;
         let bg = background_code(host, cx.hw);
         let order = processing_order(
             |i| matches!(host.prims[i], Primitive::Point { .. }),
@@ -391,7 +398,11 @@ impl Stage for Input {
             vec![
                 Unit::adder("x/y rounder", 2, w(&hw.input.coord)),
                 Unit::adder("z rounder", 1, w(&hw.input.z)),
-                Unit::adder("intensity rounder", 1, w(&hw.input.intensity)),
+                Unit::adder(
+                    "intensity rounder",
+                    cx.layout.channels as u32,
+                    w(&hw.input.intensity),
+                ),
             ],
             vec![],
         )

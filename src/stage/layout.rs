@@ -302,6 +302,11 @@ pub struct Layout {
     /// The band of pixel rows a banded run is computing (`None`: the whole screen at once).
     /// See [`Band`].
     pub band: Option<Band>,
+    /// Intensity channels: 1 (grey) or 3 (R, G, B). The geometry stages (input to
+    /// visibility) carry every channel's intensity; the stages after visibility run once per
+    /// channel on that channel's samples, with that channel's word widths
+    /// ([`crate::config::HwConfig::channel`]).
+    pub channels: usize,
 }
 
 /// One band of a banded run: the pipeline runs raster, visibility and accumulate band by

@@ -195,8 +195,8 @@ pub struct TriSetup {
     pub lower: Edge,
     /// Whether the long edge is the left one.
     pub long_is_left: bool,
-    /// Intensity plane (intensity-format LSBs).
-    pub i: Plane,
+    /// Intensity plane per channel (intensity-format LSBs; unused channels are 0).
+    pub i: [Plane; 3],
     /// Depth plane (input z-format LSBs).
     pub z: Plane,
     /// Vertices sorted top to bottom (for re-seeding at the middle vertex).
@@ -212,8 +212,8 @@ pub struct PointSetup {
     pub k: (i64, i64),
     /// Depth code.
     pub z: i64,
-    /// Intensity code.
-    pub i: i64,
+    /// Intensity code per channel.
+    pub i: [i64; 3],
 }
 
 /// Result of setup for one primitive. (Kept unboxed: one per primitive, no per-line allocation.)
@@ -274,7 +274,13 @@ pub fn triangle(v: &[QVertex; 3], g: &Grid) -> Option<TriSetup> {
         upper: e(v0, v1),
         lower: e(v1, v2),
         long_is_left: cross > 0,
-        i: Plane::new(&s, |p| p.i),
+        i: std::array::from_fn(|c| {
+            if s.iter().all(|p| p.i[c] == 0) {
+                Plane::constant(s[0].x, s[0].y, 0)
+            } else {
+                Plane::new(&s, |p| p.i[c])
+            }
+        }),
         z: Plane::new(&s, |p| p.z),
         sorted: s,
     })

@@ -42,8 +42,11 @@ pub struct FixedTaps {
     pub setups: Option<Arc<Vec<Setup>>>,
     /// Covered samples per primitive (raster).
     pub frags: Option<Arc<Frags<Frag>>>,
-    /// The sample buffer (visibility; logdomain re-codes it).
+    /// The sample buffer (visibility; logdomain re-codes it): channel 0's.
     pub samples: Option<Arc<SampleTap>>,
+    /// The sample buffers of channels 1.. of a colour render (visibility); the runner
+    /// moves each into its own lane of taps ([`Taps::lane`]).
+    pub more_samples: Vec<Arc<SampleTap>>,
     /// The frame memory (accumulate; dof replaces its codes).
     pub frame: Option<Arc<FrameTap>>,
     /// Pixel codes after the gamma LUT or the dither.
@@ -57,8 +60,10 @@ pub struct FloatTaps {
     pub prims: Option<Arc<PrimsF>>,
     /// Covered samples per primitive.
     pub frags: Option<Arc<Frags<FragF>>>,
-    /// The sample buffer.
+    /// The sample buffer: channel 0's.
     pub samples: Option<Arc<SampleTapF>>,
+    /// The sample buffers of channels 1.. of a colour render.
+    pub more_samples: Vec<Arc<SampleTapF>>,
     /// Frame intensity in frame LSBs.
     pub frame: Option<Arc<Vec<f64>>>,
     /// Pixel values after the gamma curve or the dither.
@@ -74,6 +79,20 @@ impl Taps {
     /// The host scene.
     pub fn host(&self) -> &HostScene {
         need(&self.host, "host")
+    }
+
+    /// The taps of channel `c`'s lane after visibility: these taps with channel `c`'s
+    /// sample buffers as the sample taps (the stages after visibility run once per channel
+    /// on them).
+    pub fn lane(&self, c: usize) -> Taps {
+        let mut t = self.clone();
+        if c > 0 {
+            t.fixed.samples = Some(self.fixed.more_samples[c - 1].clone());
+            t.float.samples = Some(self.float.more_samples[c - 1].clone());
+        }
+        t.fixed.more_samples.clear();
+        t.float.more_samples.clear();
+        t
     }
 }
 
@@ -132,8 +151,8 @@ impl FloatTaps {
 pub struct Prims {
     /// Primitives in scene order.
     pub q: Vec<QPrim>,
-    /// Background intensity code (quantised like a vertex intensity).
-    pub bg: u32,
+    /// Background intensity code per channel (quantised like a vertex intensity).
+    pub bg: [u32; 3],
 }
 
 /// The float reference's primitives and background.
@@ -141,8 +160,8 @@ pub struct Prims {
 pub struct PrimsF {
     /// Primitives in scene order, in the fixed formats' units.
     pub f: Vec<FPrim>,
-    /// Background intensity (intensity LSBs).
-    pub bg: f64,
+    /// Background intensity per channel (intensity LSBs).
+    pub bg: [f64; 3],
 }
 
 /// The order the geometry stages process primitives in: surfaces in scene order, then light

@@ -75,34 +75,54 @@ impl SamplesF {
 }
 
 /// The stage's float reference: the float fragments resolved into a float sample buffer
-/// over `reg` (surfaces in primitive order), then the light points' visible samples.
+/// over `reg` (surfaces in primitive order), then the light points' visible samples; one
+/// sample tap per channel (`channels` of them, the geometry shared).
 pub fn float_samples(
     prims: &super::taps::PrimsF,
     frags: &super::taps::Frags<FragF>,
     reg: SampleRegion,
-) -> SampleTapF {
-    let mut buf = SamplesF::new(reg, prims.bg);
+    channels: usize,
+) -> Vec<SampleTapF> {
+    let mut buf = SamplesF::new(reg, prims.bg[0]);
+    let mut extra: Vec<Vec<f64>> = (1..channels)
+        .map(|c| vec![prims.bg[c]; reg.len()])
+        .collect();
     for (p, f) in prims.f.iter().enumerate() {
         if !f.is_point() {
-            resolve_f64(frags.of(p), p as u32 + 1, &mut buf);
+            resolve_f64(frags.of(p), p as u32 + 1, &mut buf, &mut extra);
         }
     }
-    let mut points = Vec::new();
+    let mut points = vec![Vec::new(); channels];
     for (p, f) in prims.f.iter().enumerate() {
         let super::raster::FPrim::Point { v, .. } = f else {
             continue;
         };
-        let vis = point_visible_f64(frags.of(p), &buf);
-        points.push(PointFrags {
-            i: v.i,
-            samples: vis.into_iter().map(|v| v.0).collect(),
-        });
+        let vis: Vec<u32> = point_visible_f64(frags.of(p), &buf)
+            .into_iter()
+            .map(|v| v.0)
+            .collect();
+        for (c, pts) in points.iter_mut().enumerate() {
+            pts.push(PointFrags {
+                i: v.i[c],
+                samples: vis.clone(),
+            });
+        }
     }
-    SampleTapF {
-        samples: buf,
-        points,
-        bg: prims.bg,
-    }
+    let mut planes = std::iter::once(std::mem::take(&mut buf.i)).chain(extra);
+    points
+        .into_iter()
+        .enumerate()
+        .map(|(c, points)| SampleTapF {
+            samples: SamplesF {
+                reg,
+                z: buf.z.clone(),
+                prim: buf.prim.clone(),
+                i: planes.next().expect("one plane per channel"),
+            },
+            points,
+            bg: prims.bg[c],
+        })
+        .collect()
 }
 
 /// Depth conversion from the interpolated format to the z-buffer format.
@@ -145,15 +165,26 @@ pub struct VisWork {
     pub clamped: u64,
 }
 
-/// Depth-tests the fragments of surface `prim` into the buffer.
-pub fn resolve(frags: &[Frag], prim: u32, zc: &ZConvert, buf: &mut Samples, w: &mut VisWork) {
+/// Depth-tests the fragments of surface `prim` into the buffer: channel 0's intensity into
+/// `buf.i`, channel `c + 1`'s into `extra[c]` (a colour render's other channels).
+pub fn resolve(
+    frags: &[Frag],
+    prim: u32,
+    zc: &ZConvert,
+    buf: &mut Samples,
+    extra: &mut [Vec<u32>],
+    w: &mut VisWork,
+) {
     for f in frags {
         let s = f.s as usize;
         let z = zc.apply(f.z, &mut w.clamped);
         if z < buf.z[s] {
             buf.z[s] = z;
             buf.prim[s] = prim;
-            buf.i[s] = f.i;
+            buf.i[s] = f.i[0];
+            for (c, plane) in extra.iter_mut().enumerate() {
+                plane[s] = f.i[c + 1];
+            }
             w.writes += 1;
         }
     }
@@ -174,24 +205,27 @@ pub fn point_visible(frags: &[Frag], zc: &ZConvert, buf: &Samples, w: &mut VisWo
     out
 }
 
-/// Float reference: depth test without quantisation.
-pub fn resolve_f64(frags: &[FragF], prim: u32, buf: &mut SamplesF) {
+/// Float reference: depth test without quantisation (channels as in [`resolve`]).
+pub fn resolve_f64(frags: &[FragF], prim: u32, buf: &mut SamplesF, extra: &mut [Vec<f64>]) {
     for f in frags {
         let s = f.s as usize;
         if f.z < buf.z[s] {
             buf.z[s] = f.z;
             buf.prim[s] = prim;
-            buf.i[s] = f.i;
+            buf.i[s] = f.i[0];
+            for (c, plane) in extra.iter_mut().enumerate() {
+                plane[s] = f.i[c + 1];
+            }
         }
     }
 }
 
-/// Float reference of light-point visibility.
+/// Float reference of light-point visibility: the visible samples and channel 0's intensity.
 pub fn point_visible_f64(frags: &[FragF], buf: &SamplesF) -> Vec<(u32, f64)> {
     frags
         .iter()
         .filter(|f| f.z < buf.z[f.s as usize])
-        .map(|f| (f.s, f.i))
+        .map(|f| (f.s, f.i[0]))
         .collect()
 }
 
@@ -230,24 +264,40 @@ pub fn sample_buffer(cx: &Cx, prims: usize, intensity_bits: u32) -> Memory {
     )
 }
 
+/// Bits of a sample's stored intensity: every channel's `input.intensity` word.
+fn intensity_bits(cx: &Cx) -> u32 {
+    (0..cx.layout.channels)
+        .map(|c| {
+            super::input::intensity_quantizer(cx.hw, c)
+                .format
+                .total_bits()
+        })
+        .sum()
+}
+
 /// Name of the sample buffer memory.
 pub const SAMPLE_BUFFER: &str = "sample buffer";
 
-/// The sample buffer's modelled region as a memory image (depth, intensity, id). An empty
-/// sample ("nothing", `u32::MAX` in the model) is stored as the far code (all ones) with the
-/// background id.
-pub fn sample_image(cx: &Cx, s: Arc<SampleTap>, prims: usize, intensity_bits: u32) -> MemImage {
+/// The sample buffer's modelled region as a memory image (depth, each channel's intensity
+/// of `channels` (its sample tap and stored width), id). An empty sample ("nothing",
+/// `u32::MAX` in the model) is stored as the far code (all ones) with the background id.
+pub fn sample_image(cx: &Cx, channels: Vec<(Arc<SampleTap>, u32)>, prims: usize) -> MemImage {
     let zb = cx.hw.visibility.z.format.total_bits();
     let zmax = cx.hw.visibility.z.format.max_code() as u64;
+    let mut fields = vec![zb];
+    fields.extend(channels.iter().map(|c| c.1));
+    fields.push(id_bits(prims));
+    let n = channels.len();
+    let taps: Vec<Arc<SampleTap>> = channels.into_iter().map(|c| c.0).collect();
     MemImage {
         name: SAMPLE_BUFFER.into(),
-        fields: vec![zb, intensity_bits, id_bits(prims)],
-        words: s.samples.z.len(),
+        fields,
+        words: taps[0].samples.z.len(),
         region_only: true,
         get: Arc::new(move |r, k| match k {
-            0 => (s.samples.z[r] as u64).min(zmax),
-            1 => s.samples.i[r] as u64,
-            _ => s.samples.prim[r] as u64,
+            0 => (taps[0].samples.z[r] as u64).min(zmax),
+            k if k <= n => taps[k - 1].samples.i[r] as u64,
+            _ => taps[0].samples.prim[r] as u64,
         }),
     }
 }
@@ -285,7 +335,12 @@ impl Stage for Visibility {
         let prims = taps.fixed.prims();
         let frags = taps.fixed.frags();
         let mut w = VisWork::default();
-        let mut buf = Samples::new(cx.layout.samples, prims.bg);
+        let reg = cx.layout.samples;
+        let channels = cx.layout.channels;
+        let mut buf = Samples::new(reg, prims.bg[0]);
+        let mut extra: Vec<Vec<u32>> = (1..channels)
+            .map(|c| vec![prims.bg[c]; reg.len()])
+            .collect();
         let n = prims.q.len();
         let mut tests = vec![0u64; n];
         for (p, q) in prims.q.iter().enumerate() {
@@ -293,20 +348,28 @@ impl Stage for Visibility {
                 continue;
             }
             let before = w.tests;
-            resolve(frags.of(p), p as u32 + 1, &zc, &mut buf, &mut w);
+            resolve(frags.of(p), p as u32 + 1, &zc, &mut buf, &mut extra, &mut w);
             tests[p] = w.tests - before;
         }
-        let i_max = cx.hw.input.intensity.format.max_code();
-        let mut points = Vec::new();
+        let i_max: Vec<i64> = (0..channels)
+            .map(|c| {
+                super::input::intensity_quantizer(cx.hw, c)
+                    .format
+                    .max_code()
+            })
+            .collect();
+        let mut points = vec![Vec::new(); channels];
         for (p, q) in prims.q.iter().enumerate() {
             let QPrim::Point { v, .. } = q else { continue };
             let before = w.point_tests;
             let vis = point_visible(frags.of(p), &zc, &buf, &mut w);
             tests[p] = w.point_tests - before;
-            points.push(PointFrags {
-                i: v.i.clamp(0, i_max) as u32,
-                samples: vis,
-            });
+            for (c, pts) in points.iter_mut().enumerate() {
+                pts.push(PointFrags {
+                    i: v.i[c].clamp(0, i_max[c]) as u32,
+                    samples: vis.clone(),
+                });
+            }
         }
         let order = processing_order(|i| matches!(prims.q[i], QPrim::Point { .. }), n);
         let tokens = order.iter().map(|&i| tests[i]).collect();
@@ -324,18 +387,45 @@ impl Stage for Visibility {
         };
         facts.note("samples_in_region", cx.layout.samples.len() as u64);
         let bg = prims.bg;
-        taps.fixed.samples = Some(Arc::new(SampleTap {
-            samples: buf,
-            points,
-            bg,
-            coding: SampleCoding::Linear,
-        }));
+        let mut points = points.into_iter();
+        let mut tap = |c: usize, samples: Samples| {
+            Arc::new(SampleTap {
+                samples,
+                points: points.next().expect("one list per channel"),
+                bg: bg[c],
+                coding: SampleCoding::Linear,
+            })
+        };
+        // Channels 1.. share the depth and the winning primitive of every sample.
+        let more: Vec<Samples> = extra
+            .into_iter()
+            .map(|i| Samples {
+                reg,
+                z: buf.z.clone(),
+                prim: buf.prim.clone(),
+                i,
+            })
+            .collect();
+        taps.fixed.samples = Some(tap(0, buf));
+        taps.fixed.more_samples = more
+            .into_iter()
+            .enumerate()
+            .map(|(c, s)| tap(c + 1, s))
+            .collect();
         Ok((tokens, facts))
     }
 
     fn float(&self, cx: &Cx, _: &Vec<u64>, taps: &mut Taps, _: &mut Notes) -> Result<()> {
-        let s = float_samples(taps.float.prims(), taps.float.frags(), cx.layout.samples);
-        taps.float.samples = Some(Arc::new(s));
+        let mut s = float_samples(
+            taps.float.prims(),
+            taps.float.frags(),
+            cx.layout.samples,
+            cx.layout.channels,
+        )
+        .into_iter()
+        .map(Arc::new);
+        taps.float.samples = s.next();
+        taps.float.more_samples = s.collect();
         Ok(())
     }
 
@@ -352,7 +442,7 @@ impl Stage for Visibility {
         let prims = out.fixed.prims();
         let frags = out.fixed.frags();
         let fixed = &out.fixed.samples().samples;
-        let mut shadow = SamplesF::new(fixed.reg, prims.bg as f64);
+        let mut shadow = SamplesF::new(fixed.reg, prims.bg[0] as f64);
         let mut exact: Vec<FragF> = Vec::new();
         for (p, q) in prims.q.iter().enumerate() {
             if matches!(q, QPrim::Point { .. }) {
@@ -362,10 +452,10 @@ impl Stage for Visibility {
             exact.extend(frags.of(p).iter().map(|x| FragF {
                 s: x.s,
                 z: x.z as f64,
-                i: x.i as f64,
+                i: x.i.map(|i| i as f64),
             }));
             exact.sort_by_key(|x| x.s);
-            resolve_f64(&exact, p as u32 + 1, &mut shadow);
+            resolve_f64(&exact, p as u32 + 1, &mut shadow, &mut []);
         }
         let mut e = LocalError::default();
         for (a, b) in fixed.prim.iter().zip(&shadow.prim) {
@@ -393,8 +483,7 @@ impl Stage for Visibility {
         let memories = if cx.layout.has(StageId::Logdomain) {
             vec![]
         } else {
-            let ib = cx.hw.input.intensity.format.total_bits();
-            vec![sample_buffer(cx, tests.len(), ib)]
+            vec![sample_buffer(cx, tests.len(), intensity_bits(cx))]
         };
         Cost::new(memories, vec![Unit::adder("depth compare", 1, zb)], vec![])
     }
@@ -403,12 +492,19 @@ impl Stage for Visibility {
         if cx.layout.has(StageId::Logdomain) {
             return vec![];
         }
-        let ib = cx.hw.input.intensity.format.total_bits();
         let s = out
             .fixed
             .samples
             .clone()
             .expect("visibility wrote the samples");
-        vec![sample_image(cx, s, tests.len(), ib)]
+        let channels = std::iter::once(s)
+            .chain(out.fixed.more_samples.iter().cloned())
+            .enumerate()
+            .map(|(c, t)| {
+                let q = super::input::intensity_quantizer(cx.hw, c);
+                (t, q.format.total_bits())
+            })
+            .collect();
+        vec![sample_image(cx, channels, tests.len())]
     }
 }

@@ -191,7 +191,7 @@ pub fn lens_frame(
     let prims = input::float_prims(&host, hw);
     let (region, reg) = regions(&input::footprints(&host, hw), k, grid.width, grid.height);
     let frags = float_frags(&prims.f, grid, &reg, 0);
-    let samples = float_samples(&prims, &frags, reg);
+    let samples = float_samples(&prims, &frags, reg, 1).swap_remove(0);
     drop(frags);
     float_frame(&samples, k, hw, (grid.width, grid.height), &region)
 }

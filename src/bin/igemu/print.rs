@@ -226,9 +226,16 @@ pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
     let c = &r.end_to_end.codes;
     let w = &r.end_to_end.weber;
     outln!();
+    if r.colour.is_some() {
+        outln!(
+            "colour render: R, G and B through one raster and one z-buffer; the figures below are channel R's, then each channel's"
+        );
+    }
     outln!(
         "end to end, DAC codes ({} bits), fixed vs float reference:",
-        r.hardware.gamma.dac_bits
+        r.colour
+            .as_ref()
+            .map_or(r.hardware.gamma.dac_bits, |c| c.channels[0].dac_bits)
     );
     outln!(
         "  identical {:.4}% | max |diff| {} | mean diff {:+.5} | PSNR {}",
@@ -263,6 +270,9 @@ pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
         k.contour_steps_reference,
         k.smooth_steps
     );
+    if let Some(col) = &r.colour {
+        print_colour(col)?;
+    }
     if let Some(pm) = r
         .stages
         .iter()
@@ -362,6 +372,30 @@ pub fn print_front(
         }
         let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
         outln!("  {}", cfg.join(" "));
+    }
+    Ok(())
+}
+
+/// The per-channel lines of a colour render.
+fn print_colour(col: &igemu::pipeline::colour::ColourReport) -> Result<(), Error> {
+    outln!(
+        "  per channel (frame word, DAC bits): identical | max |diff| | visible Weber px | contour steps fixed/float | overflows | storage bits"
+    );
+    for ch in &col.channels {
+        let (c, w, k) = (&ch.end_to_end.codes, &ch.end_to_end.weber, &ch.contours);
+        outln!(
+            "    {} ({}, {} bits): {:.4}% | {} | {} | {}/{} | {} | {}",
+            ch.name,
+            ch.frame,
+            ch.dac_bits,
+            100.0 * c.identical_fraction,
+            c.max_abs_diff,
+            w.over_delta,
+            k.contour_steps,
+            k.contour_steps_reference,
+            ch.overflows,
+            ch.storage_bits
+        );
     }
     Ok(())
 }

@@ -73,12 +73,12 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
         .q
         .iter()
         .flat_map(|p| match p {
-            QPrim::Triangle(v) => vec![v[0].i, v[1].i, v[2].i],
-            QPrim::Line { a, b, .. } => vec![a.i, b.i],
-            QPrim::Point { v, .. } => vec![v.i],
+            QPrim::Triangle(v) => vec![v[0].i[0], v[1].i[0], v[2].i[0]],
+            QPrim::Line { a, b, .. } => vec![a.i[0], b.i[0]],
+            QPrim::Point { v, .. } => vec![v.i[0]],
         })
         .map(|i| i.max(0) as u32)
-        .chain(std::iter::once(bg))
+        .chain(std::iter::once(bg[0]))
         .collect();
     for (k, t) in taps.iter().enumerate() {
         let w = ws[k % ws.len()];

@@ -8,7 +8,7 @@
 
 use super::vec3::{cross, norm, normalize, sub};
 use super::{
-    Camera, Display, ImageSpec, Lens, Light, MAX_PRIMITIVES, MAX_RESOLUTION, Object, Scene,
+    Camera, Display, ImageSpec, Lens, Light, MAX_PRIMITIVES, MAX_RESOLUTION, Object, Rgb, Scene,
     Shading, primitive_count, tessellate,
 };
 use crate::error::FileError;
@@ -46,7 +46,8 @@ struct RawScene {
 struct RawImage {
     width: i64,
     height: i64,
-    background: Option<f64>,
+    background: Option<toml::Value>,
+    colour: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -93,12 +94,14 @@ struct RawShading {
 #[serde(deny_unknown_fields)]
 struct RawLight {
     direction: Vec3,
-    intensity: Option<f64>,
+    intensity: Option<toml::Value>,
 }
 
-/// Validation context: the file, for locating errors.
+/// Validation context: the file, for locating errors, and whether any colour was given as
+/// an `[r, g, b]` array (the default of `[image] colour`).
 struct Ctx<'a> {
     file: &'a TomlFile,
+    coloured: std::cell::Cell<bool>,
 }
 
 impl Ctx<'_> {
@@ -114,6 +117,38 @@ impl Ctx<'_> {
                 path,
                 format!("must be {}, got {}", range.describe(), num(x)),
             ))
+        }
+    }
+
+    /// A colour: a number (grey, R = G = B) or an array `[r, g, b]`, each in `range`.
+    fn colour(&self, path: &str, v: Option<&toml::Value>, default: f64, range: Range) -> R<Rgb> {
+        let Some(v) = v else {
+            return Ok([default; 3]);
+        };
+        let what = || {
+            format!(
+                "{} or an array [r, g, b] of three such numbers",
+                range.describe()
+            )
+        };
+        let number = |p: &str, x: &toml::Value| match x {
+            toml::Value::Float(x) => self.num(p, *x, range),
+            toml::Value::Integer(i) => self.num(p, *i as f64, range),
+            _ => Err(self.err(p, format!("must be {}, got {x}", what()))),
+        };
+        match v {
+            toml::Value::Array(a) if a.len() == 3 => {
+                self.coloured.set(true);
+                let mut c = [0.0; 3];
+                for (k, x) in a.iter().enumerate() {
+                    c[k] = number(&format!("{path}[{k}]"), x)?;
+                }
+                Ok(c)
+            }
+            toml::Value::Array(a) => {
+                Err(self.err(path, format!("must be {}, got {} values", what(), a.len())))
+            }
+            x => Ok([number(path, x)?; 3]),
         }
     }
 
@@ -171,7 +206,10 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
     let raw: RawScene = file
         .parse_with(&hint)
         .map_err(|e| objects::unknown_field_of_kind(file, e))?;
-    let c = Ctx { file };
+    let c = Ctx {
+        file,
+        coloured: std::cell::Cell::new(false),
+    };
     let name = raw.name.unwrap_or_else(|| stem(&file.name));
     let image = image(&c, &raw.image)?;
     let camera = camera(&c, &raw.camera)?;
@@ -189,9 +227,9 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         .map(|(k, l)| {
             Ok(Light {
                 direction: c.direction(&format!("light[{k}].direction"), l.direction)?,
-                intensity: c.opt(
+                intensity: c.colour(
                     &format!("light[{k}].intensity"),
-                    l.intensity,
+                    l.intensity.as_ref(),
                     1.0,
                     INTENSITY,
                 )?,
@@ -205,6 +243,10 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         .map(|(k, o)| object(&c, &format!("object[{k}]"), o, (image.width, image.height)))
         .collect::<R<Vec<_>>>()?;
     primitives(&c, &objects)?;
+    let image = ImageSpec {
+        colour: raw.image.colour.unwrap_or(c.coloured.get()),
+        ..image
+    };
     Ok(Scene {
         name,
         image,
@@ -257,7 +299,8 @@ fn image(c: &Ctx, r: &RawImage) -> R<ImageSpec> {
     Ok(ImageSpec {
         width: c.int("image.width", r.width, 1, MAX_RESOLUTION)?,
         height: c.int("image.height", r.height, 1, MAX_RESOLUTION)?,
-        background: c.opt("image.background", r.background, 0.0, UNIT)?,
+        background: c.colour("image.background", r.background.as_ref(), 0.0, UNIT)?,
+        colour: false,
     })
 }
 

@@ -4,7 +4,7 @@
 
 use super::schema::{INTENSITY, LENGTH, SHININESS, UNIT, Vec3, max_width, num};
 use super::{Ctx, R, Range};
-use crate::scene::{MAX_TESSELLATION, MIN_TESSELLATION, Material, Object, Space};
+use crate::scene::{MAX_TESSELLATION, MIN_TESSELLATION, Material, Object, Rgb, Space};
 use serde::Deserialize;
 
 #[derive(Deserialize, Default)]
@@ -27,10 +27,10 @@ pub(super) struct RawObject {
     width: Option<f64>,
     position: Option<Vec3>,
     size: Option<f64>,
-    reflectance: Option<f64>,
+    reflectance: Option<toml::Value>,
     specular: Option<f64>,
     shininess: Option<f64>,
-    emissive: Option<f64>,
+    emissive: Option<toml::Value>,
 }
 
 const KINDS: &str = "\"sphere\", \"torus\", \"cone\", \"cylinder\", \"triangle\", \"quad\", \"line\", \"light_point\"";
@@ -366,10 +366,10 @@ fn vertex(c: &Ctx, path: &str, v: Vec3, space: Space) -> R<[f64; 3]> {
 fn material(c: &Ctx, p: &str, o: &RawObject) -> R<Material> {
     let d = Material::default();
     Ok(Material {
-        reflectance: c.opt(
+        reflectance: c.colour(
             &format!("{p}.reflectance"),
-            o.reflectance,
-            d.reflectance,
+            o.reflectance.as_ref(),
+            d.reflectance[0],
             UNIT,
         )?,
         specular: c.opt(&format!("{p}.specular"), o.specular, d.specular, INTENSITY)?,
@@ -379,21 +379,18 @@ fn material(c: &Ctx, p: &str, o: &RawObject) -> R<Material> {
             d.shininess,
             SHININESS,
         )?,
-        emissive: c.opt(&format!("{p}.emissive"), o.emissive, d.emissive, INTENSITY)?,
+        emissive: c.colour(
+            &format!("{p}.emissive"),
+            o.emissive.as_ref(),
+            d.emissive[0],
+            INTENSITY,
+        )?,
     })
 }
 
-fn value_number(v: &toml::Value) -> Option<f64> {
-    match v {
-        toml::Value::Float(x) => Some(*x),
-        toml::Value::Integer(i) => Some(*i as f64),
-        _ => None,
-    }
-}
-
-fn intensity_list(c: &Ctx, path: &str, v: &toml::Value, n: usize) -> R<Vec<f64>> {
+fn intensity_list(c: &Ctx, path: &str, v: &toml::Value, n: usize) -> R<Vec<Rgb>> {
     let what = format!(
-        "an array of {n} finite numbers in [0, {}] (one per vertex)",
+        "an array of {n} intensities (one per vertex), each a finite number in [0, {}] or an [r, g, b] array of them",
         num(crate::scene::MAX_INTENSITY)
     );
     let toml::Value::Array(a) = v else {
@@ -404,24 +401,17 @@ fn intensity_list(c: &Ctx, path: &str, v: &toml::Value, n: usize) -> R<Vec<f64>>
     }
     a.iter()
         .enumerate()
-        .map(|(k, x)| {
-            let p = format!("{path}[{k}]");
-            let x = value_number(x)
-                .ok_or_else(|| c.err(&p, format!("must be {}, got {x}", INTENSITY.describe())))?;
-            c.num(&p, x, INTENSITY)
-        })
+        .map(|(k, x)| c.colour(&format!("{path}[{k}]"), Some(x), 0.0, INTENSITY))
         .collect()
 }
 
-fn scalar_intensity(c: &Ctx, p: &str, kind: &str, v: Option<&toml::Value>) -> R<f64> {
+fn scalar_intensity(c: &Ctx, p: &str, kind: &str, v: Option<&toml::Value>) -> R<Rgb> {
     let what = INTENSITY.describe();
     let v = c.required(
         p,
         "intensity",
         v,
-        &format!("required for kind = \"{kind}\"; {what}"),
+        &format!("required for kind = \"{kind}\"; {what} or an [r, g, b] array of them"),
     )?;
-    let path = format!("{p}.intensity");
-    let x = value_number(v).ok_or_else(|| c.err(&path, format!("must be {what}, got {v}")))?;
-    c.num(&path, x, INTENSITY)
+    c.colour(&format!("{p}.intensity"), Some(v), 0.0, INTENSITY)
 }

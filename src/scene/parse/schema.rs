@@ -85,6 +85,14 @@ pub(super) fn max_width(width: u32, height: u32) -> f64 {
     2.0 * (diag + 2.0 * f64::from(MAX_GUARD_BAND))
 }
 
+/// A colour field: a number in `range` (grey) or an `[r, g, b]` array of them.
+fn rgb(range: Range) -> String {
+    format!(
+        "{} or an array [r, g, b] of three such numbers",
+        range.describe()
+    )
+}
+
 const VEC3: &str = "an array of exactly 3 finite numbers [x, y, z]";
 
 /// What a scene field expects, by dotted path (indices ignored): the message hint of the TOML
@@ -106,11 +114,14 @@ pub(crate) fn hint(path: &str) -> Option<String> {
             "a scene: tables [image], [camera] and optionally [display], [shading], [[light]], [[object]]",
         ),
         "name" => s("a string (the scene's name)"),
-        "image" => s("a table [image] with width, height and optionally background"),
+        "image" => s("a table [image] with width, height and optionally background and colour"),
         "image.width" | "image.height" => {
             format!("an integer in 1..={MAX_RESOLUTION} (pixels)")
         }
-        "image.background" => UNIT.describe(),
+        "image.background" => rgb(UNIT),
+        "image.colour" => s(
+            "a boolean (true: render R, G and B; default: true when any colour is an [r, g, b] array)",
+        ),
         "camera" => s(
             "a table [camera] with position, look_at, near, far and optionally up, fov_y_deg, [camera.lens]",
         ),
@@ -149,7 +160,7 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         "light" => s("an array of tables, one [[light]] per light (direction, intensity)"),
         "light.direction" if vertex_elem => COORD.describe(),
         "light.direction" => format!("{}, non-zero", vec3()),
-        "light.intensity" => INTENSITY.describe(),
+        "light.intensity" => rgb(INTENSITY),
         "object" => s("an array of tables, one [[object]] per object, each with a kind"),
         "object.kind" => s(
             "one of \"sphere\", \"torus\", \"cone\", \"cylinder\", \"triangle\", \"quad\", \"line\", \"light_point\"",
@@ -176,15 +187,16 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         "object.vertices" if indices == 1 => vec3(),
         "object.vertices" => format!("an array of 3 (triangle) or 4 (quad) vertices, each {VEC3}"),
         "object.intensity" => format!(
-            "{} (line, light_point) or an array of one such number per vertex (triangle, quad)",
-            INTENSITY.describe()
+            "{} (line, light_point) or an array of one such intensity per vertex (triangle, quad)",
+            rgb(INTENSITY)
         ),
         "object.width" | "object.size" => format!(
             "a finite number in (0, 2 (screen diagonal + {})] pixels",
             2 * MAX_GUARD_BAND
         ),
-        "object.reflectance" => UNIT.describe(),
-        "object.specular" | "object.emissive" => INTENSITY.describe(),
+        "object.reflectance" => rgb(UNIT),
+        "object.emissive" => rgb(INTENSITY),
+        "object.specular" => INTENSITY.describe(),
         "object.shininess" => SHININESS.describe(),
         _ => return None,
     })

@@ -217,9 +217,8 @@ impl Stage for Logdomain {
         }
         v.push(sample_image(
             cx,
-            e.stored.clone(),
+            vec![(e.stored.clone(), e.enc.code.bits.min(ib))],
             e.prims,
-            e.enc.code.bits.min(ib),
         ));
         v
     }

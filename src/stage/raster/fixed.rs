@@ -37,10 +37,13 @@ pub struct RasterParams {
     pub guard: u32,
     /// Rounding of interpolators to sample codes.
     pub quant: Quant,
-    /// Largest intensity code.
-    pub i_max: i64,
+    /// Largest intensity code per channel.
+    pub i_max: [i64; 3],
     /// Largest depth code.
     pub z_max: i64,
+    /// Intensity channels interpolated (1 grey, 3 colour): one set of edge walkers and one
+    /// intensity interpolator per channel, stepped together.
+    pub channels: usize,
 }
 
 #[inline]
@@ -54,22 +57,23 @@ fn out_code(v: i64, p: &RasterParams, max: i64, clamped: &mut u64) -> u32 {
     }
 }
 
-/// Left-edge attribute stepping: increments for a column move of `a` or `a + 1`.
+/// Left-edge attribute stepping: increments for a column move of `a` or `a + 1`, per
+/// intensity channel and for depth.
 struct EdgeInterp {
-    inc_a_i: i64,
-    inc_a1_i: i64,
+    inc_a_i: [i64; 3],
+    inc_a1_i: [i64; 3],
     inc_a_z: i64,
     inc_a1_z: i64,
 }
 
 impl EdgeInterp {
-    fn new(e: &Edge, di: (i64, i64), dz: (i64, i64)) -> Self {
+    fn new(e: &Edge, di: &[(i64, i64); 3], dz: (i64, i64)) -> Self {
         // Setup-time products: the edge's integer step times the column gradient.
-        let inc_a_i = di.1 + e.a * di.0;
+        let inc_a_i = di.map(|d| d.1 + e.a * d.0);
         let inc_a_z = dz.1 + e.a * dz.0;
         Self {
             inc_a_i,
-            inc_a1_i: inc_a_i + di.0,
+            inc_a1_i: std::array::from_fn(|c| inc_a_i[c] + di[c].0),
             inc_a_z,
             inc_a1_z: inc_a_z + dz.0,
         }
@@ -108,16 +112,27 @@ pub fn raster_tri_rows(
         return;
     }
     // Column and row gradients with guard bits (setup-time divisions).
-    let di = (t.i.dx(h2, p.guard), t.i.dy(h2, p.guard));
+    let nc = p.channels;
+    let di: [(i64, i64); 3] = std::array::from_fn(|c| {
+        if c < nc {
+            (t.i[c].dx(h2, p.guard), t.i[c].dy(h2, p.guard))
+        } else {
+            (0, 0)
+        }
+    });
     let dz = (t.z.dx(h2, p.guard), t.z.dy(h2, p.guard));
     let x_of = |c: i64| (2 * c + 1) * g.h;
     let y_of = |k: i64| (2 * k + 1) * g.h;
     let mut in_upper = upper.k0 < upper.k1 && k_start < upper.k1;
     let seed = |e: &Edge, k: i64| {
-        (
-            t.i.eval(x_of(e.q), y_of(k), p.guard),
-            t.z.eval(x_of(e.q), y_of(k), p.guard),
-        )
+        let i: [i64; 3] = std::array::from_fn(|c| {
+            if c < nc {
+                t.i[c].eval(x_of(e.q), y_of(k), p.guard)
+            } else {
+                0
+            }
+        });
+        (i, t.z.eval(x_of(e.q), y_of(k), p.guard))
     };
     let first_left = if t.long_is_left {
         long
@@ -127,7 +142,7 @@ pub fn raster_tri_rows(
         lower
     };
     let (mut vi, mut vz) = seed(&first_left, k_start);
-    let mut interp = EdgeInterp::new(&first_left, di, dz);
+    let mut interp = EdgeInterp::new(&first_left, &di, dz);
     let width = reg.width();
     let mut k = k_start;
     loop {
@@ -144,18 +159,24 @@ pub fn raster_tri_rows(
                 w.spans += 1;
                 let (mut si, mut sz) = (vi, vz);
                 for _ in lq..c_start {
-                    si += di.0;
+                    for ch in 0..nc {
+                        si[ch] += di[ch].0;
+                    }
                     sz += dz.0;
                 }
                 w.walked += (c_start - lq) as u64;
                 let row = (k - reg.k0) as usize * width;
                 for c in c_start..c_end {
+                    let mut i = [0u32; 3];
+                    for ch in 0..nc {
+                        i[ch] = out_code(si[ch], p, p.i_max[ch], &mut w.clamped);
+                        si[ch] += di[ch].0;
+                    }
                     out.push(Frag {
                         s: (row + (c - reg.c0) as usize) as u32,
                         z: out_code(sz, p, p.z_max, &mut w.clamped),
-                        i: out_code(si, p, p.i_max, &mut w.clamped),
+                        i,
                     });
-                    si += di.0;
                     sz += dz.0;
                 }
                 w.samples += (c_end - c_start) as u64;
@@ -181,7 +202,7 @@ pub fn raster_tri_rows(
         if !t.long_is_left && switch {
             // The left edge changes at the middle vertex: re-seed (a setup operation).
             (vi, vz) = seed(&lower, k);
-            interp = EdgeInterp::new(&lower, di, dz);
+            interp = EdgeInterp::new(&lower, &di, dz);
             if above || k >= reg.k0 {
                 w.reseeds += 1;
             }
@@ -191,7 +212,10 @@ pub fn raster_tri_rows(
             } else {
                 short_carry
             };
-            vi += if c { interp.inc_a1_i } else { interp.inc_a_i };
+            let inc = if c { &interp.inc_a1_i } else { &interp.inc_a_i };
+            for ch in 0..nc {
+                vi[ch] += inc[ch];
+            }
             vz += if c { interp.inc_a1_z } else { interp.inc_a_z };
         }
     }
@@ -211,7 +235,7 @@ pub fn raster_point(
         return;
     }
     let z = pt.z.clamp(0, p.z_max) as u32;
-    let i = pt.i.clamp(0, p.i_max) as u32;
+    let i: [u32; 3] = std::array::from_fn(|c| pt.i[c].clamp(0, p.i_max[c]) as u32);
     for k in k0..k1 {
         w.spans += 1;
         for c in c0..c1 {

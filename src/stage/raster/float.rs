@@ -14,8 +14,8 @@ pub struct FVertex {
     pub y: f64,
     /// Depth, z-format LSBs.
     pub z: f64,
-    /// Intensity, intensity-format LSBs.
-    pub i: f64,
+    /// Intensity per channel, intensity-format LSBs.
+    pub i: [f64; 3],
 }
 
 /// A float primitive.
@@ -49,7 +49,7 @@ impl FPrim {
             x: q.x as f64 / s,
             y: q.y as f64 / s,
             z: q.z as f64,
-            i: q.i as f64,
+            i: q.i.map(|i| i as f64),
         };
         match p {
             QPrim::Triangle(t) => FPrim::Triangle([v(&t[0]), v(&t[1]), v(&t[2])]),
@@ -86,14 +86,14 @@ pub fn raster_tri_f64(v: &[FVertex; 3], g: &Grid, reg: &SampleRegion, out: &mut 
     }
     let n = g.n as f64;
     let det = cross;
-    let plane = |f: fn(&FVertex) -> f64| {
+    let plane = |f: &dyn Fn(&FVertex) -> f64| {
         let (a1, a2) = (f(&v1) - f(&v0), f(&v2) - f(&v0));
         let gx = (a1 * (v2.y - v0.y) - a2 * (v1.y - v0.y)) / det;
         let gy = (a2 * (v1.x - v0.x) - a1 * (v2.x - v0.x)) / det;
         (f(&v0), gx, gy)
     };
-    let pi = plane(|p| p.i);
-    let pz = plane(|p| p.z);
+    let pi: [(f64, f64, f64); 3] = std::array::from_fn(|c| plane(&|p: &FVertex| p.i[c]));
+    let pz = plane(&|p: &FVertex| p.z);
     let row_of = |y: f64| (y * n - 0.5).ceil() as i64;
     let cross_col = |a: &FVertex, b: &FVertex, y: f64| {
         let x = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
@@ -120,7 +120,7 @@ pub fn raster_tri_f64(v: &[FVertex; 3], g: &Grid, reg: &SampleRegion, out: &mut 
             out.push(FragF {
                 s: (row + (c - reg.c0) as usize) as u32,
                 z: pz.0 + pz.1 * dx + pz.2 * dy,
-                i: pi.0 + pi.1 * dx + pi.2 * dy,
+                i: pi.map(|pi| pi.0 + pi.1 * dx + pi.2 * dy),
             });
         }
     }

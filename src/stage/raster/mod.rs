@@ -32,8 +32,8 @@ pub struct Frag {
     pub s: u32,
     /// Depth, input z-format code.
     pub z: u32,
-    /// Intensity, intensity-format code.
-    pub i: u32,
+    /// Intensity per channel, intensity-format codes (unused channels 0).
+    pub i: [u32; 3],
 }
 
 /// Float fragment.
@@ -43,8 +43,8 @@ pub struct FragF {
     pub s: u32,
     /// Depth in input z-format LSBs.
     pub z: f64,
-    /// Intensity in intensity-format LSBs.
-    pub i: f64,
+    /// Intensity per channel in intensity-format LSBs.
+    pub i: [f64; 3],
 }
 
 /// The raster's parameters from the hardware configuration.
@@ -54,8 +54,13 @@ pub fn params(cx: &Cx) -> RasterParams {
         grid: cx.layout.grid,
         guard: hw.raster.interp_guard_bits,
         quant: hw.raster.interp_quant,
-        i_max: hw.input.intensity.format.max_code(),
+        i_max: std::array::from_fn(|c| {
+            crate::stage::input::intensity_quantizer(hw, c)
+                .format
+                .max_code()
+        }),
         z_max: hw.input.z.format.max_code(),
+        channels: cx.layout.channels,
     }
 }
 
@@ -79,11 +84,19 @@ pub fn float_frags(
 }
 
 /// Merges two fragment lists sorted by sample index: coverage mismatches and attribute errors.
-fn compare_frags(fx: &[Frag], fl: &[FragF], i_err: &mut LocalError, z_err: &mut LocalError) {
+fn compare_frags(
+    fx: &[Frag],
+    fl: &[FragF],
+    channels: usize,
+    i_err: &mut LocalError,
+    z_err: &mut LocalError,
+) {
     let (mut a, mut b) = (0, 0);
     while a < fx.len() || b < fl.len() {
         if a < fx.len() && b < fl.len() && fx[a].s == fl[b].s {
-            i_err.add(fx[a].i as f64, fl[b].i);
+            for c in 0..channels {
+                i_err.add(fx[a].i[c] as f64, fl[b].i[c]);
+            }
             z_err.add(fx[a].z as f64, fl[b].z);
             a += 1;
             b += 1;
@@ -197,7 +210,7 @@ impl Stage for Raster {
             // A line is two triangles: sort both lists so they merge by sample.
             fx.sort_by_key(|x| x.s);
             fl.sort_by_key(|x| x.s);
-            compare_frags(&fx, &fl, &mut i_err, &mut z_err);
+            compare_frags(&fx, &fl, cx.layout.channels, &mut i_err, &mut z_err);
         }
         notes.insert(
             "depth_local".into(),

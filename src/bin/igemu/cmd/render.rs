@@ -95,20 +95,49 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         // The hex files' names are known once the plan has run: checked before any write.
         check_outputs(&a, &inputs, &igemu::cost::rom::files(&stages))?;
     }
-    output::write_dac(&a.out, &r.dac, w, h, r.dac_bits)?;
+    write_image(&a.out, &r, false)?;
     if let Some(p) = &a.reference_out {
-        output::write_dac(p, &r.dac_ref, w, h, r.dac_bits)?;
+        write_image(p, &r, true)?;
     }
     if let Some(p) = &a.diff_out {
-        output::write_diff(p, &r.dac, &r.dac_ref, w, h)?;
+        match &r.colour {
+            // Each channel's difference map in its own colour plane.
+            Some(c) => {
+                let maps: Vec<Vec<u8>> = c
+                    .channels
+                    .iter()
+                    .map(|k| output::diff_values(&k.dac, &k.dac_ref))
+                    .collect();
+                output::write_rgb8(p, &interleave(&maps), w, h)?;
+            }
+            None => output::write_diff(p, &r.dac, &r.dac_ref, w, h)?,
+        }
     }
     if let (Some(p), Some(t)) = (&a.truth_out, &r.truth_dac) {
         output::write_dac(p, t, w, h, r.dac_bits)?;
     }
     if let Some(p) = &a.banding_out {
-        let img =
-            igemu::perceptual::banding_image(&r.dac, &r.contour_map, (1u32 << r.dac_bits) - 1);
-        output::write_raw8(p, &img, w, h)?;
+        match &r.colour {
+            Some(c) => {
+                let maps: Vec<Vec<u8>> = c
+                    .channels
+                    .iter()
+                    .map(|k| {
+                        igemu::perceptual::banding_image(
+                            &k.dac,
+                            &k.contour_map,
+                            (1u32 << k.bits) - 1,
+                        )
+                    })
+                    .collect();
+                output::write_rgb8(p, &interleave(&maps), w, h)?;
+            }
+            None => {
+                let max = (1u32 << r.dac_bits) - 1;
+                let img = igemu::perceptual::banding_image(&r.dac, &r.contour_map, max);
+                output::write_raw8(p, &img, w, h)?;
+            }
+        }
     }
     for (tap, path) in &a.dump {
         let taps = r.taps(tap.stage).ok_or_else(|| {
@@ -146,6 +175,34 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         print_report(&r.report, &a.out)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Writes the render's image (or its float reference): an RGB PNG of the channels' DAC
+/// codes for a colour render, else the grey DAC codes.
+fn write_image(path: &str, r: &pipeline::Render, reference: bool) -> Result<(), Error> {
+    let (w, h) = (r.report.scene.width, r.report.scene.height);
+    fn pick(k: &igemu::pipeline::colour::ChannelCodes, reference: bool) -> &[u16] {
+        if reference { &k.dac_ref } else { &k.dac }
+    }
+    match &r.colour {
+        Some(c) => {
+            let ch = &c.channels;
+            let planes = [0, 1, 2].map(|c| pick(&ch[c], reference));
+            output::write_rgb(path, planes, [ch[0].bits, ch[1].bits, ch[2].bits], w, h)?;
+        }
+        None => {
+            let codes = if reference { &r.dac_ref } else { &r.dac };
+            output::write_dac(path, codes, w, h, r.dac_bits)?;
+        }
+    }
+    Ok(())
+}
+
+/// Three planes of one value per pixel interleaved as R, G, B.
+fn interleave(maps: &[Vec<u8>]) -> Vec<u8> {
+    (0..maps[0].len())
+        .flat_map(|p| maps.iter().map(move |m| m[p]))
+        .collect()
 }
 
 /// Refuses, before any write, an output path that cannot be written or is an input, a

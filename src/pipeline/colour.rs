@@ -1,0 +1,124 @@
+//! A colour render's channels: the DAC codes of each channel's lane (the stages after
+//! visibility, run once per channel on its samples with its word widths) and each
+//! channel's comparison with its float reference, cost and overflows.
+//!
+//! Channel 0 (R) is the render's own steps (the geometry stages and R's lane); its
+//! comparison is the report's `end_to_end` as for a grey render. The cycle model counts one
+//! lane: the three channels are parallel datapaths behind one raster and one z-buffer (as in
+//! the image generators the tool models), so a colour frame takes the cycles of a grey one
+//! and the cost of three intensity datapaths.
+
+use super::cache::Cache;
+use super::report::{EndToEnd, ideal};
+use super::run::Step;
+use crate::compare::{self, DisplayModel};
+use crate::config::HwConfig;
+use crate::perceptual::{self, ContourReport};
+use crate::scene::Scene;
+use crate::stage::{PixelTapF, StageReport};
+use serde::Serialize;
+
+/// The channels' names, in order.
+pub const NAMES: [&str; 3] = ["R", "G", "B"];
+
+/// One channel's DAC codes, fixed and float.
+#[derive(Clone, Debug)]
+pub struct ChannelCodes {
+    /// Fixed DAC codes, row-major.
+    pub dac: Vec<u16>,
+    /// Float reference DAC codes.
+    pub dac_ref: Vec<u16>,
+    /// DAC width.
+    pub bits: u32,
+    /// Per pixel: 0 not smooth, 1 smooth, 2 next to a visible contour step (this channel).
+    pub contour_map: Vec<u8>,
+}
+
+/// The DAC codes, fixed and float, after the last of `steps`.
+pub fn dac_codes(steps: &[Step]) -> (Vec<u16>, Vec<u16>) {
+    let taps = &steps.last().expect("a plan runs stages").outcome.taps;
+    let dac = taps
+        .fixed
+        .pixels()
+        .codes
+        .iter()
+        .map(|&c| c as u16)
+        .collect();
+    let dac_ref = match taps.float.pixels() {
+        PixelTapF::Codes(c) => c.iter().map(|&c| c as u16).collect(),
+        PixelTapF::Values(_) => unreachable!("the last stage writes DAC codes"),
+    };
+    (dac, dac_ref)
+}
+
+/// One channel of the report (`render --json`: `colour.channels`).
+#[derive(Clone, Debug, Serialize)]
+pub struct ChannelReport {
+    /// `R`, `G` or `B`.
+    pub name: &'static str,
+    /// The channel's frame-memory word.
+    pub frame: String,
+    /// The channel's DAC width.
+    pub dac_bits: u32,
+    /// The channel's DAC codes against its float reference.
+    pub end_to_end: EndToEnd,
+    /// Visible contours of the channel through its display transfer.
+    pub contours: ContourReport,
+    /// Overflows over the signals of the channel's lane.
+    pub overflows: u64,
+    /// Storage bits (RAM) of the channel's lane.
+    pub storage_bits: u64,
+    /// LUT / ROM bits of the channel's lane.
+    pub lut_bits: u64,
+    /// The stages of the channel's lane (after visibility).
+    pub stages: Vec<StageReport>,
+}
+
+/// The colour part of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct ColourReport {
+    /// Per channel, R, G, B.
+    pub channels: Vec<ChannelReport>,
+}
+
+/// Channel `c`'s codes and report from its lane's steps (`lane`: the stages after
+/// visibility) under its configuration `hw` (already [`HwConfig::channel`]).
+pub fn channel(
+    scene: &Scene,
+    hw: &HwConfig,
+    c: usize,
+    lane: &[Step],
+    cache: Option<&Cache>,
+) -> (ChannelCodes, ChannelReport) {
+    let (dac, dac_ref) = dac_codes(lane);
+    let bits = hw.gamma.dac_bits;
+    let display = DisplayModel::new(&scene.display, bits);
+    let ideal = ideal(scene, hw, lane, cache);
+    let contours = perceptual::contours(&dac, &dac_ref, &ideal.ideal, &display);
+    let stages: Vec<StageReport> = lane.iter().map(|s| s.outcome.report.clone()).collect();
+    let report = ChannelReport {
+        name: NAMES[c],
+        frame: hw.accumulate.frame.format.to_string(),
+        dac_bits: bits,
+        end_to_end: EndToEnd {
+            codes: compare::codes(&dac, &dac_ref, bits),
+            weber: compare::weber(&dac, &dac_ref, &display),
+        },
+        contours: contours.report,
+        overflows: stages
+            .iter()
+            .flat_map(|s| &s.signals)
+            .map(|s| s.overflows)
+            .sum(),
+        storage_bits: stages.iter().map(|s| s.cost.storage_bits).sum(),
+        lut_bits: stages.iter().map(|s| s.cost.lut_bits).sum(),
+        stages,
+    };
+    let codes = ChannelCodes {
+        dac,
+        dac_ref,
+        bits,
+        contour_map: contours.map,
+    };
+    (codes, report)
+}

@@ -1,0 +1,214 @@
+//! Colour through the pipeline: R, G and B share one raster and one z-buffer and run the
+//! stages after visibility once per channel. A grey scene rendered in three channels gives
+//! its grey DAC codes in every channel (so the golden hashes of the grey scenes carry over),
+//! per-channel word widths reach their channel, a flat colour field is flat in every
+//! channel, and the binary writes an RGB PNG.
+
+mod common;
+
+use igemu::config::{DofKind, HwConfig};
+use igemu::files::TomlFile;
+use igemu::pipeline::{self, Render};
+use igemu::scene::Scene;
+use igemu::stage::RunOptions;
+
+fn render(s: &Scene, h: &HwConfig) -> Render {
+    pipeline::render(s, h, RunOptions::FAST).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn hw_text(text: &str) -> HwConfig {
+    HwConfig::from_toml(&TomlFile::from_text("hw.toml", text)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The default scene at a quarter of its size (the same geometry and lens).
+fn small_default() -> Scene {
+    let mut s = Scene::default_scene();
+    s.image.width = 160;
+    s.image.height = 120;
+    s
+}
+
+#[test]
+fn a_grey_scene_in_three_channels_gives_its_grey_codes_in_each() {
+    // The full-size default scene: its grey codes are the golden ones (tests/golden.rs).
+    let grey = Scene::default_scene();
+    let mut colour = grey.clone();
+    colour.image.colour = true;
+    let h = HwConfig::default_config();
+    let g = render(&grey, &h);
+    assert!(g.colour.is_none(), "a grey scene renders one channel");
+    let c = render(&colour, &h);
+    let ch = &c.colour.as_ref().expect("three channels").channels;
+    assert_eq!(ch.len(), 3);
+    for (k, channel) in ch.iter().enumerate() {
+        assert!(
+            channel.dac == g.dac,
+            "channel {k}: fixed codes differ from grey"
+        );
+        assert!(
+            channel.dac_ref == g.dac_ref,
+            "channel {k}: float codes differ"
+        );
+    }
+    assert_eq!(c.dac, g.dac, "the report's channel is R");
+    // One raster and one z-buffer: the geometry stages ran once.
+    let geometry = ["input", "setup", "raster", "visibility"];
+    for name in geometry {
+        assert_eq!(
+            c.steps.iter().filter(|s| s.id.name() == name).count(),
+            1,
+            "{name}"
+        );
+    }
+    let lanes = &c.colour.as_ref().unwrap().lanes;
+    assert_eq!(lanes.len(), 2);
+    assert!(
+        lanes
+            .iter()
+            .flatten()
+            .all(|s| !geometry.contains(&s.id.name()))
+    );
+    // The report counts three intensity datapaths: the frame memory three times.
+    let frame = |r: &Render| r.report.cycles.cost.storage_bits.get("accumulate").copied();
+    assert_eq!(frame(&c), frame(&g).map(|b| 3 * b));
+}
+
+#[test]
+fn every_dof_method_keeps_a_grey_scene_grey_in_three_channels() {
+    for kind in [DofKind::Layered, DofKind::Luminance, DofKind::Downsample] {
+        let mut h = HwConfig::default_config();
+        h.dof.kind = kind;
+        let grey = small_default();
+        let mut colour = grey.clone();
+        colour.image.colour = true;
+        let g = render(&grey, &h);
+        let c = render(&colour, &h);
+        for (k, ch) in c.colour.as_ref().unwrap().channels.iter().enumerate() {
+            assert!(ch.dac == g.dac, "{kind:?} channel {k}");
+            assert!(ch.dac_ref == g.dac_ref, "{kind:?} channel {k} float");
+        }
+    }
+}
+
+#[test]
+fn per_channel_widths_reach_their_channel() {
+    let h = hw_text(
+        "[accumulate]\nframe = [\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"]\n[gamma]\ndac_bits = [5, 6, 5]\n",
+    );
+    assert!(h.per_channel());
+    assert_eq!(h.channel(1).accumulate.frame.format.to_string(), "UQ6.0");
+    assert_eq!(
+        h.channel(1).input.intensity.format.int_bits,
+        6,
+        "follows the frame"
+    );
+    assert_eq!(h.channel(2).gamma.dac_bits, 5);
+    // A grey scene on per-channel hardware renders three channels.
+    let s = small_default();
+    let r = render(&s, &h);
+    let c = r
+        .colour
+        .as_ref()
+        .expect("per-channel widths render three channels");
+    let rep = r.report.colour.as_ref().unwrap();
+    let names: Vec<&str> = rep.channels.iter().map(|c| c.frame.as_str()).collect();
+    assert_eq!(names, ["UQ5.0", "UQ6.0", "UQ5.0"]);
+    assert_eq!(
+        c.channels.iter().map(|k| k.bits).collect::<Vec<_>>(),
+        [5, 6, 5]
+    );
+    for k in &c.channels {
+        assert!(k.dac.iter().all(|&d| u32::from(d) < 1 << k.bits));
+    }
+    // Green has one more bit than red and blue everywhere, so its frame memory is larger.
+    let frame = |c: usize| rep.channels[c].stages[0].cost.storage_bits;
+    assert!(frame(1) > frame(0) && frame(0) == frame(2));
+    // Each channel alone is the grey render with that channel's widths.
+    for ch in 0..3 {
+        let g = render(&s, &h.channel(ch));
+        assert!(c.channels[ch].dac == g.dac, "channel {ch}");
+    }
+}
+
+#[test]
+fn a_flat_colour_field_is_flat_in_every_channel() {
+    let quad = "[[object]]\nkind = \"quad\"\nspace = \"screen\"\n\
+        vertices = [[-4, -4, 0.5], [68, -4, 0.5], [68, 52, 0.5], [-4, 52, 0.5]]\n\
+        intensity = [[0.8, 0.3, 0.05], [0.8, 0.3, 0.05], [0.8, 0.3, 0.05], [0.8, 0.3, 0.05]]\n";
+    let s = common::scene(64, 48, 0.0, quad);
+    assert!(
+        s.image.colour,
+        "an [r, g, b] intensity makes a colour scene"
+    );
+    for filter in ["box", "tent"] {
+        let h = hw_text(&format!("[accumulate]\nfilter = \"{filter}\"\n"));
+        let r = render(&s, &h);
+        let ch = &r.colour.as_ref().unwrap().channels;
+        let first: Vec<u16> = ch.iter().map(|k| k.dac[0]).collect();
+        for (k, c) in ch.iter().enumerate() {
+            assert!(
+                c.dac.iter().all(|&d| d == first[k]),
+                "{filter}: channel {k} flat"
+            );
+            assert_eq!(
+                c.dac, c.dac_ref,
+                "{filter}: channel {k} equals its reference"
+            );
+        }
+        assert!(first[0] > first[1] && first[1] > first[2], "{first:?}");
+    }
+}
+
+#[test]
+fn colour_scenes_parse_rgb_values_and_grey_ones() {
+    let s = Scene::embedded("default-colour").expect("embedded");
+    assert!(s.image.colour);
+    assert_eq!(s.channels(), 3);
+    assert_eq!(s.image.background, [0.03, 0.045, 0.08]);
+    let grey = Scene::default_scene();
+    assert!(!grey.image.colour && grey.channels() == 1);
+    assert_eq!(grey.image.background, [0.05; 3]);
+    // An array of the wrong length names the field and the forms it takes.
+    let bad =
+        common::scene_toml(8, 8, 0.0, "").replace("background = 0", "background = [0.1, 0.2]");
+    let e = Scene::from_toml(&TomlFile::from_text("c.toml", &bad)).unwrap_err();
+    assert_eq!(e.field, "image.background");
+    assert!(
+        e.msg.contains("[r, g, b]") && e.msg.contains("got 2 values"),
+        "{e}"
+    );
+    // `colour = false` renders a scene with colours as one channel (channel R's values).
+    let forced = common::scene_toml(8, 8, 0.0, "").replace(
+        "background = 0",
+        "background = [0.1, 0.2, 0.3]\ncolour = false",
+    );
+    let s = Scene::from_toml(&TomlFile::from_text("c.toml", &forced)).unwrap();
+    assert_eq!(s.channels(), 1);
+}
+
+#[test]
+fn the_binary_writes_an_rgb_png_and_reports_each_channel() {
+    let dir = std::env::temp_dir().join(format!("igemu-colour-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("c.png");
+    let o = out.to_str().unwrap();
+    let (code, stdout, stderr) = common::igemu(&["render", "default-colour", "-o", o]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("per channel"), "{stdout}");
+    for name in [
+        "R (UQ12.0, 8 bits)",
+        "G (UQ12.0, 8 bits)",
+        "B (UQ12.0, 8 bits)",
+    ] {
+        assert!(stdout.contains(name), "{name}: {stdout}");
+    }
+    let img = image::open(&out).unwrap();
+    assert_eq!(img.color(), image::ColorType::Rgb8);
+    let rgb = img.to_rgb8();
+    // The cone is red: somewhere red far exceeds blue.
+    assert!(
+        rgb.pixels()
+            .any(|p| u32::from(p[0]) > 2 * u32::from(p[2]) + 40)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
