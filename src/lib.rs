@@ -23,6 +23,7 @@
 //! direction only (docs/STRUCTURE.md).
 
 pub mod analysis;
+pub mod colour;
 pub mod compare;
 pub mod config;
 pub mod cost;

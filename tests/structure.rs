@@ -20,7 +20,7 @@ const LAYERS: &[&[&str]] = &[
     &["scene"],
     &["config"],
     &["stage"],
-    &["compare", "perceptual", "cycles", "cost", "truth"],
+    &["compare", "perceptual", "colour", "cycles", "cost", "truth"],
     &["pipeline"],
     &["analysis", "sweep", "hdl", "html"],
 ];
