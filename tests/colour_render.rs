@@ -212,3 +212,35 @@ fn the_binary_writes_an_rgb_png_and_reports_each_channel() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The width paper's colour-mix distortion: a saturated shaded ramp (R:G:B = 5:2:1) through
+/// 5-6-5 frame words shifts the hue of smooth surfaces and leaves pixels beyond the 2.3 JND;
+/// 8-8-8 shifts it less and leaves none; 12-bit words hardly at all.
+#[test]
+fn a_saturated_ramp_at_565_shifts_hue_that_wider_words_do_not() {
+    let quad = "[[object]]\nkind = \"quad\"\nspace = \"screen\"\n\
+        vertices = [[-4, -4, 0.5], [260, -4, 0.5], [260, 36, 0.5], [-4, 36, 0.5]]\n\
+        intensity = [[0.1, 0.04, 0.02], [0.9, 0.36, 0.18], [0.9, 0.36, 0.18], [0.1, 0.04, 0.02]]\n";
+    let s = common::scene(256, 32, 0.0, quad);
+    let run = |frame: &str| {
+        let h = hw_text(&format!("[accumulate]\nframe = {frame}\n"));
+        let r = render(&s, &h);
+        let c = r.report.colour.expect("colour");
+        (c.hue_shift, c.delta_e)
+    };
+    let (h565, e565) = run("[\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"]");
+    let (h888, e888) = run("[\"UQ8.0\", \"UQ8.0\", \"UQ8.0\"]");
+    let (h12, e12) = run("\"UQ12.0\"");
+    // Every smooth pixel of the ramp is chromatic, and most of the ramp is smooth (the
+    // reference spans at most 2 codes per channel over 5x5 pixels).
+    assert_eq!(h565.pixels, h565.smooth_pixels);
+    assert!(h565.pixels > 256 * 32 / 2, "{h565:?}");
+    assert!(h565.mean_deg > 3.0 * h888.mean_deg, "{h565:?} {h888:?}");
+    assert!(h888.mean_deg > 3.0 * h12.mean_deg, "{h888:?} {h12:?}");
+    assert!(
+        h565.mean_deg > 1.0 && h12.mean_deg < 0.1,
+        "{h565:?} {h12:?}"
+    );
+    assert!(e565.over_jnd > 0 && e888.over_jnd == 0, "{e565:?} {e888:?}");
+    assert!(e565.mean > e888.mean && e888.mean > e12.mean);
+}

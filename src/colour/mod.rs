@@ -11,19 +11,17 @@
 //!
 //! **Metrics.** [`delta_e`]: the per-pixel CIEDE2000 difference `Delta E_00` and its
 //! statistics; [`hue_shift`]: the hue angle error on smooth chromatic surfaces, the
-//! colour-mix distortion of too-narrow words; [`colour_contours`]: the banding metric of
-//! [`crate::perceptual`] on each channel's plane; [`delta_e_image`]: an RGB8 heat map of the
-//! per-pixel `Delta E_00`.
+//! colour-mix distortion of too-narrow words; [`delta_e_image`]: an RGB8 heat map of the
+//! per-pixel `Delta E_00`. Visible contours are measured per channel by the banding metric
+//! of [`crate::perceptual`] on each channel's lane (`pipeline::colour`).
 //!
 //! Everything here is a pure function over integer code planes; nothing depends on the
 //! pipeline's types.
 
-mod contours;
 mod delta_e;
 mod heat;
 mod hue;
 
-pub use contours::{ColourContourReport, ColourContours, colour_contours, ideal_images};
 pub use delta_e::{DeltaE, JND, delta_e};
 pub use heat::{HEAT_STOPS, delta_e_image, heat_colour};
 pub use hue::{HueShift, MIN_CHROMA, WINDOW_RADIUS, hue_shift, smooth_mask};

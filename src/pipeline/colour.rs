@@ -11,6 +11,7 @@
 use super::cache::Cache;
 use super::report::{EndToEnd, ideal};
 use super::run::Step;
+use crate::colour::{self, ColourDisplay, DeltaE, HueShift, RgbCodes};
 use crate::compare::{self, DisplayModel};
 use crate::config::HwConfig;
 use crate::perceptual::{self, ContourReport};
@@ -79,6 +80,56 @@ pub struct ChannelReport {
 pub struct ColourReport {
     /// Per channel, R, G, B.
     pub channels: Vec<ChannelReport>,
+    /// CIEDE2000 between the fixed and the float reference image through the display
+    /// (each channel's transfer, sRGB primaries; [`crate::colour`]).
+    pub delta_e: DeltaE,
+    /// The hue shift on smooth chromatic surfaces, fixed against float: the colour-mix
+    /// distortion of too-narrow words.
+    pub hue_shift: HueShift,
+    /// Visible contour steps over the three channels (fixed; float reference).
+    pub contour_steps: [u64; 2],
+}
+
+/// The colour report of the three channels' codes and reports, and the per-pixel CIEDE2000
+/// map (row-major).
+pub fn report(
+    scene: &Scene,
+    codes: &[ChannelCodes],
+    channels: Vec<ChannelReport>,
+) -> (ColourReport, Vec<f32>) {
+    let (width, height) = (scene.image.width, scene.image.height);
+    let bits = [0, 1, 2].map(|c| codes[c].bits);
+    let image = |reference: bool| RgbCodes {
+        planes: [0, 1, 2].map(|c| {
+            if reference {
+                codes[c].dac_ref.as_slice()
+            } else {
+                codes[c].dac.as_slice()
+            }
+        }),
+        bits,
+        width,
+        height,
+    };
+    let (fixed, reference) = (image(false), image(true));
+    let display = ColourDisplay::new(&scene.display, bits);
+    let mut delta_e = colour::delta_e(&fixed, &reference, &display);
+    let map = std::mem::take(&mut delta_e.map);
+    let hue_shift = colour::hue_shift(&fixed, &reference, &display);
+    let contour_steps = [
+        channels.iter().map(|c| c.contours.contour_steps).sum(),
+        channels
+            .iter()
+            .map(|c| c.contours.contour_steps_reference)
+            .sum(),
+    ];
+    let r = ColourReport {
+        channels,
+        delta_e,
+        hue_shift,
+        contour_steps,
+    };
+    (r, map)
 }
 
 /// Channel `c`'s codes and report from its lane's steps (`lane`: the stages after

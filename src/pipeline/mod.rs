@@ -58,6 +58,8 @@ pub struct ColourRender {
     pub channels: Vec<colour::ChannelCodes>,
     /// The steps after visibility of channels 1.. (channel 0's are in [`Render::steps`]).
     pub lanes: Vec<Vec<Step>>,
+    /// Per pixel, row-major: CIEDE2000 of the fixed against the float reference image.
+    pub delta_e: Vec<f32>,
 }
 
 impl Render {
@@ -153,10 +155,12 @@ fn render_on_pool(
             codes.push(k);
             reports.push(r);
         }
-        report.colour = Some(colour::ColourReport { channels: reports });
+        let (r, delta_e) = colour::report(scene, &codes, reports);
+        report.colour = Some(r);
         ColourRender {
             channels: codes,
             lanes,
+            delta_e,
         }
     });
     let (dof_truth, truth_dac) =

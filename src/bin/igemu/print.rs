@@ -397,5 +397,28 @@ fn print_colour(col: &igemu::pipeline::colour::ColourReport) -> Result<(), Error
             ch.storage_bits
         );
     }
+    let (e, hue) = (&col.delta_e, &col.hue_shift);
+    outln!(
+        "  colour (CIEDE2000 through the display, sRGB primaries): mean {:.4} | p99 {:.4} | max {:.4} | > 1: {} px | > {}: {} px (Delta E*ab > {}: {} px)",
+        e.mean,
+        e.p99,
+        e.max,
+        e.over_1,
+        igemu::colour::JND,
+        e.over_jnd,
+        igemu::colour::JND,
+        e.over_jnd_ab
+    );
+    outln!(
+        "  hue shift on smooth chromatic surfaces (chroma >= {}): {} of {} smooth px | mean {:.3} deg | p99 {:.3} deg | max {:.3} deg | contour steps over R, G, B {} (float {})",
+        igemu::colour::MIN_CHROMA,
+        hue.pixels,
+        hue.smooth_pixels,
+        hue.mean_deg,
+        hue.p99_deg,
+        hue.max_deg,
+        col.contour_steps[0],
+        col.contour_steps[1]
+    );
     Ok(())
 }

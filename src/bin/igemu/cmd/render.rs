@@ -46,9 +46,12 @@ pub struct RenderArgs {
     /// Skip the stage-local comparisons (faster).
     #[arg(long)]
     pub no_local: bool,
-    /// Write the banding map: the output dimmed, smooth regions lifted, visible contour steps white (8-bit PNG).
+    /// Write the banding map: the output dimmed, smooth regions lifted, visible contour steps white (8-bit PNG; one plane per channel for a colour render).
     #[arg(long)]
     pub banding_out: Option<String>,
+    /// Write the CIEDE2000 map of a colour render, fixed against float (RGB heat map: black 0, blue 1, yellow 2.3, red 5 and above).
+    #[arg(long, value_name = "PATH")]
+    pub delta_e_out: Option<String>,
     /// Also run the per-pixel depth-of-field reference (slow: O(N^2 M^2)) and the layer theorem check.
     #[arg(long)]
     pub dof_reference: bool,
@@ -75,6 +78,15 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         ));
     }
     let hw = a.s.hw()?;
+    if a.delta_e_out.is_some() && pipeline::plan::channels(&scene, &hw) == 1 {
+        return Err(arg_error(
+            "--delta-e-out",
+            format!(
+                "scene `{}` on `{}` renders one grey channel: the CIEDE2000 map is of a colour render (a scene with [r, g, b] colours or `[image] colour = true`, or per-channel hardware widths)",
+                scene.name, hw.name
+            ),
+        ));
+    }
     let r = pipeline::render(
         &scene,
         &hw,
@@ -138,6 +150,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
                 output::write_raw8(p, &img, w, h)?;
             }
         }
+    }
+    if let (Some(p), Some(c)) = (&a.delta_e_out, &r.colour) {
+        output::write_rgb8(p, &igemu::colour::delta_e_image(&c.delta_e, w, h), w, h)?;
     }
     for (tap, path) in &a.dump {
         let taps = r.taps(tap.stage).ok_or_else(|| {
@@ -214,6 +229,7 @@ fn check_outputs(a: &RenderArgs, inputs: &Inputs, rom_files: &[String]) -> Resul
         ("--reference-out", &a.reference_out),
         ("--diff-out", &a.diff_out),
         ("--banding-out", &a.banding_out),
+        ("--delta-e-out", &a.delta_e_out),
         ("--truth-out", &a.truth_out),
         ("--report", &a.report),
         ("--html", &a.html),
