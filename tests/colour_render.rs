@@ -96,6 +96,14 @@ fn per_channel_widths_reach_their_channel() {
         "[accumulate]\nframe = [\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"]\n[gamma]\ndac_bits = [5, 6, 5]\n",
     );
     assert!(h.per_channel());
+    // Two values are neither one nor three: the message names the field and both forms.
+    let bad = "[accumulate]\nframe = [\"UQ5.0\", \"UQ6.0\"]\n";
+    let e = HwConfig::from_toml(&TomlFile::from_text("hw.toml", bad)).unwrap_err();
+    assert_eq!((e.field.as_str(), e.line), ("accumulate.frame", Some(2)));
+    assert!(
+        e.msg.contains("UQ<int>.<frac>") && e.msg.contains("array of three"),
+        "{e}"
+    );
     assert_eq!(h.channel(1).accumulate.frame.format.to_string(), "UQ6.0");
     assert_eq!(
         h.channel(1).input.intensity.format.int_bits,

@@ -81,6 +81,15 @@ pub(super) fn describe(
             prefix.push_str(&seg[b..]);
         }
     }
+    if raw.starts_with("data did not match any variant of untagged enum PerChannel") {
+        // A per-channel field: one value for every channel, or an array of three.
+        let h = hint(path).unwrap_or_else(|| "a value".into());
+        return (
+            path.to_string(),
+            format!("must be {h}, or an array of three such values (R, G, B), got {found}"),
+            true,
+        );
+    }
     if let Some(rest) = raw.strip_prefix("missing field ") {
         let name = quoted(rest).unwrap_or(rest);
         let field = join(path, name);
