@@ -10,8 +10,8 @@ use crate::error::Result;
 use crate::fnv::Fnv;
 use crate::scene::Scene;
 use crate::stage::{
-    self, AnyFixed, Cx, DynStage, MemImage, Memo, NoMemo, RunOptions, StageId, StageReport, Taps,
-    Tokens, ms_since,
+    self, AnyFixed, ChannelFrames, Cx, DynStage, MemImage, Memo, NoMemo, RunOptions, StageId,
+    StageReport, Taps, Tokens, ms_since,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -110,23 +110,83 @@ pub fn run_lanes(
     if done || split == order.len() {
         return Ok((steps, Vec::new()));
     }
-    let mut lanes = Vec::with_capacity(channels - 1);
-    for c in 0..channels {
-        let lane_hw = hw.channel(c);
-        let lane_key = if c == 0 {
-            key
-        } else {
-            Fnv::new().u64(key).str("channel").u64(c as u64).finish()
+    // The lanes run stage by stage, so that a stage reading every channel's frame finds
+    // them all finished.
+    let mut lanes: Vec<Lane> = (0..channels)
+        .map(|c| Lane {
+            hw: hw.channel(c),
+            taps: taps.lane(c),
+            key: if c == 0 {
+                key
+            } else {
+                Fnv::new().u64(key).str("channel").u64(c as u64).finish()
+            },
+            steps: Vec::new(),
+        })
+        .collect();
+    for &id in &order[split..] {
+        let cx = Cx {
+            scene,
+            hw: &lanes[0].hw,
+            layout: &plan.layout,
+            opts,
+            input_key: lanes[0].key,
+            memo,
         };
-        let mut lane = Vec::new();
-        run.stages(&lane_hw, &order[split..], taps.lane(c), lane_key, &mut lane)?;
-        if c == 0 {
-            steps.extend(lane);
-        } else {
-            lanes.push(lane);
+        if stage::get(id).reads_channels(&cx) {
+            share_frames(&mut lanes);
+        }
+        let mut done = false;
+        for lane in &mut lanes {
+            let taps = std::mem::take(&mut lane.taps);
+            let (t, k, d) = run.stages(&lane.hw, &[id], taps, lane.key, &mut lane.steps)?;
+            (lane.taps, lane.key) = (t, k);
+            done |= d;
+        }
+        if done {
+            break;
         }
     }
-    Ok((steps, lanes))
+    let mut lanes = lanes.into_iter().map(|l| l.steps);
+    steps.extend(lanes.next().unwrap_or_default());
+    Ok((steps, lanes.collect()))
+}
+
+/// One channel's lane after visibility.
+struct Lane {
+    /// The channel's configuration ([`HwConfig::channel`]).
+    hw: HwConfig,
+    /// Its taps after the last stage run.
+    taps: Taps,
+    /// The key of that stage.
+    key: u64,
+    /// Its steps.
+    steps: Vec<Step>,
+}
+
+/// Gives every lane the frames of all lanes (the tap `channels`) and keys each lane's next
+/// stage by every lane's input.
+fn share_frames(lanes: &mut [Lane]) {
+    let fixed: Option<Vec<_>> = lanes.iter().map(|l| l.taps.fixed.frame.clone()).collect();
+    let float: Option<Vec<_>> = lanes.iter().map(|l| l.taps.float.frame.clone()).collect();
+    let (Some(fixed), Some(float)) = (fixed, float) else {
+        return;
+    };
+    let formats: Vec<_> = lanes.iter().map(|l| l.hw.accumulate.frame.format).collect();
+    let mut all = Fnv::new().str("channels");
+    for l in lanes.iter() {
+        all = all.u64(l.key);
+    }
+    let all = all.finish();
+    for (c, l) in lanes.iter_mut().enumerate() {
+        l.taps.channels = Some(Arc::new(ChannelFrames {
+            lane: c,
+            fixed: fixed.clone(),
+            float: float.clone(),
+            formats: formats.clone(),
+        }));
+        l.key = Fnv::new().u64(l.key).u64(all).finish();
+    }
 }
 
 /// What every stage of one run shares.
@@ -272,6 +332,8 @@ pub(super) fn execute_keep(
         None
     };
     let local_ms = ms_since(t);
+    // Every channel's frames are read by the stage they were given to, not passed on.
+    taps.channels = None;
     let tokens = stage.tokens(cx, &fixed);
     let cost = stage.cost(cx, &fixed);
     let images = stage.memories(cx, &fixed, &taps);

@@ -198,6 +198,12 @@ pub trait Stage: Sync + 'static {
     fn cost(&self, cx: &Cx, fixed: &Self::Fixed) -> Cost;
     /// The contents of its memories (names as in [`Stage::cost`]) for the pack check.
     fn memories(&self, cx: &Cx, fixed: &Self::Fixed, output: &Taps) -> Vec<MemImage>;
+    /// Whether the stage reads every channel's frame of a colour render (the tap
+    /// `channels`), not only its own lane's: the runner then runs the lanes up to it in
+    /// step and keys each lane's result by every lane's input.
+    fn reads_channels(&self, _cx: &Cx) -> bool {
+        false
+    }
 }
 
 /// A stage's private result, type-erased.
@@ -230,6 +236,8 @@ pub trait DynStage: Sync {
     fn cost(&self, cx: &Cx, fixed: &AnyFixed) -> Cost;
     /// [`Stage::memories`].
     fn memories(&self, cx: &Cx, fixed: &AnyFixed, output: &Taps) -> Vec<MemImage>;
+    /// [`Stage::reads_channels`].
+    fn reads_channels(&self, cx: &Cx) -> bool;
 }
 
 fn typed<S: Stage>(f: &AnyFixed) -> &S::Fixed {
@@ -272,5 +280,8 @@ impl<S: Stage> DynStage for S {
     }
     fn memories(&self, cx: &Cx, fixed: &AnyFixed, output: &Taps) -> Vec<MemImage> {
         Stage::memories(self, cx, typed::<S>(fixed), output)
+    }
+    fn reads_channels(&self, cx: &Cx) -> bool {
+        Stage::reads_channels(self, cx)
     }
 }

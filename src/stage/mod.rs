@@ -30,7 +30,7 @@ pub use report::{
     Cost, Facts, LocalError, MemImage, MemKind, Memory, Notes, StageReport, TokenKind, Tokens,
     Unit, WeberCompare, ms_since, weber_of,
 };
-pub use taps::{FixedTaps, FloatTaps, PixelTap, PixelTapF, Taps};
+pub use taps::{ChannelFrames, FixedTaps, FloatTaps, PixelTap, PixelTapF, Taps};
 
 /// The implementation of a stage: the one place that maps stage ids to stages.
 pub fn get(id: StageId) -> &'static dyn DynStage {

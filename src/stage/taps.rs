@@ -11,6 +11,7 @@
 //! | `frags` | raster | covered samples per primitive | the same from the float raster |
 //! | `samples` | visibility, logdomain | resolved sample buffer, visible light-point samples | the same in f64 |
 //! | `frame` | accumulate, dof | frame memory (codes, depth, coverage) and its coding | frame intensity in frame LSBs |
+//! | `channels` | the runner, before a stage reading all channels | every channel's frame | every channel's float frame |
 //! | `pixels` | gamma, dither | codes with `frac` fraction bits (the DAC codes at the end) | real values or codes |
 
 use super::accumulate::{Frame, PointFrags};
@@ -19,6 +20,7 @@ use super::logdomain::{LogAdder, LogCode};
 use super::raster::{FPrim, Frag, FragF};
 use super::setup::Setup;
 use super::visibility::{Samples, SamplesF};
+use crate::fixed::QFormat;
 use crate::scene::HostScene;
 use std::sync::Arc;
 
@@ -31,6 +33,22 @@ pub struct Taps {
     pub fixed: FixedTaps,
     /// The float reference's taps.
     pub float: FloatTaps,
+    /// Every channel's frame, set by the runner before a stage that reads all channels of a
+    /// colour render ([`crate::stage::Stage::reads_channels`]) and dropped after it.
+    pub channels: Option<Arc<ChannelFrames>>,
+}
+
+/// Every channel's frame before a stage that reads all channels (the luminance-aware DoF
+/// of a colour render weighs its blur by the luminance of R, G and B).
+pub struct ChannelFrames {
+    /// The channel of the lane these taps belong to (0 R, 1 G, 2 B).
+    pub lane: usize,
+    /// Each channel's fixed frame memory.
+    pub fixed: Vec<Arc<FrameTap>>,
+    /// Each channel's float frame, in its frame LSBs.
+    pub float: Vec<Arc<Vec<f64>>>,
+    /// Each channel's frame word.
+    pub formats: Vec<QFormat>,
 }
 
 /// Taps of the fixed-point model.

@@ -6,7 +6,7 @@
 
 use super::downsample::{DownPlan, Downsample};
 use super::layered::Layered;
-use super::luminance::{LumPlan, Luminance};
+use super::luminance::{LumPlan, Luma, Luminance};
 use super::method::{Method, n2};
 use super::potentiate::FramePotentiation;
 use super::{
@@ -15,9 +15,10 @@ use super::{
 };
 use crate::config::{CodingKind, DofKind, HwConfig};
 use crate::error::Result;
+use crate::fixed::QFormat;
 use crate::scene::{Lens, Scene};
 use crate::stage::accumulate::Frame;
-use crate::stage::taps::{FrameCoding, FrameTap, Taps};
+use crate::stage::taps::{ChannelFrames, FrameCoding, FrameTap, Taps};
 use crate::stage::{Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, Tokens};
 use std::sync::Arc;
 
@@ -40,7 +41,7 @@ macro_rules! with_method {
                 $body
             }
             MethodPlan::Luminance($plan) => {
-                let $m = &Luminance;
+                let $m = &Luminance::default();
                 $body
             }
             MethodPlan::Downsample($plan) => {
@@ -61,8 +62,16 @@ pub struct Blurred {
 }
 
 impl Blurred {
-    /// The float method on `value` with the input frame's depth and coverage.
-    fn float(&self, cx: &Cx, value: &[f64]) -> Vec<f64> {
+    /// The float method on `value` with the input frame's depth and coverage; a colour
+    /// frame's luminance-aware blur takes the luminance of the float frames, or with `local`
+    /// that of the fixed input codes.
+    fn float(&self, cx: &Cx, value: &[f64], local: bool) -> Vec<f64> {
+        if let MethodPlan::Luminance(plan) = &self.plan
+            && let Some(y) = &plan.luma
+        {
+            let lum = if local { &y.local } else { &y.float };
+            return plan.colour_f64(cx, &self.input.frame, value, lum, &self.lens);
+        }
         with_method!(&self.plan, |m, plan| m.float(
             cx,
             plan,
@@ -138,25 +147,17 @@ impl Stage for Dof {
             .frame
             .clone()
             .expect("accumulate wrote the frame");
-        let (input, pot) = match &stored.coding {
-            FrameCoding::Linear => (stored, None),
-            FrameCoding::Log(add) => {
-                let pot = FramePotentiation::build(add, hw.accumulate.frame.format);
-                let mut frame = stored.frame.clone();
-                frame.acc = pot.apply(&frame.acc);
-                let linear = FrameTap {
-                    frame,
-                    coding: FrameCoding::Linear,
-                };
-                (Arc::new(linear), Some(pot))
-            }
-        };
+        let (input, pot) = linear(&stored, hw.accumulate.frame.format);
         let frame = &input.frame;
         let lens = LensMap::of(cx.scene, hw, frame.height)
             .expect("the plan runs dof for a thin lens only");
         let (plan, out, mut facts) = match hw.dof.kind {
             DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
-            DofKind::Luminance => run(&Luminance, cx, frame, &lens, MethodPlan::Luminance)?,
+            DofKind::Luminance => {
+                let g = hw.dof.luminance.guard_bits;
+                let luma = taps.channels.as_deref().map(|ch| Arc::new(luma_of(ch, g)));
+                run(&Luminance { luma }, cx, frame, &lens, MethodPlan::Luminance)?
+            }
             DofKind::Downsample => run(&Downsample, cx, frame, &lens, MethodPlan::Downsample)?,
         };
         if let Some(pot) = &pot {
@@ -221,7 +222,7 @@ impl Stage for Dof {
     /// depth-edge band and the interior) and, for the layered method, the layer theorem's
     /// check.
     fn float(&self, cx: &Cx, b: &Blurred, taps: &mut Taps, notes: &mut Notes) -> Result<()> {
-        let new_ref = b.float(cx, taps.float.frame());
+        let new_ref = b.float(cx, taps.float.frame(), false);
         if cx.opts.dof_reference {
             notes.insert(
                 "per_pixel_reference".into(),
@@ -243,7 +244,7 @@ impl Stage for Dof {
         notes: &mut Notes,
     ) -> Option<LocalError> {
         let accf: Vec<f64> = b.input.frame.acc.iter().map(|&v| v as f64).collect();
-        let local = b.float(cx, &accf);
+        let local = b.float(cx, &accf, true);
         let white = cx.hw.accumulate.frame.format.max_code() as f64;
         let o = &out.fixed.frame().frame.acc;
         let outf: Vec<f64> = o.iter().map(|&v| v as f64).collect();
@@ -253,6 +254,12 @@ impl Stage for Dof {
                 .unwrap_or_default(),
         );
         Some(local_error(o, &local, white))
+    }
+
+    /// The luminance-aware method weighs a colour frame's blur by the luminance of all
+    /// three channels.
+    fn reads_channels(&self, cx: &Cx) -> bool {
+        cx.hw.dof.kind == DofKind::Luminance
     }
 
     fn tokens(&self, cx: &Cx, b: &Blurred) -> Option<Tokens> {
@@ -272,6 +279,39 @@ impl Stage for Dof {
         m.extend(b.pot.as_ref().map(FramePotentiation::image));
         m
     }
+}
+
+/// The frame `stored` with linear codes of the word `format`: a log-coded frame
+/// potentiated by a LUT (returned for its cost and ROM image).
+fn linear(stored: &Arc<FrameTap>, format: QFormat) -> (Arc<FrameTap>, Option<FramePotentiation>) {
+    match &stored.coding {
+        FrameCoding::Linear => (stored.clone(), None),
+        FrameCoding::Log(add) => {
+            let pot = FramePotentiation::build(add, format);
+            let mut frame = stored.frame.clone();
+            frame.acc = pot.apply(&frame.acc);
+            let linear = FrameTap {
+                frame,
+                coding: FrameCoding::Linear,
+            };
+            (Arc::new(linear), Some(pot))
+        }
+    }
+}
+
+/// The luminance of a colour render's channel frames (each made linear first), with `g`
+/// guard bits.
+fn luma_of(ch: &ChannelFrames, g: u32) -> Luma {
+    let codes: Vec<Arc<FrameTap>> = (0..3)
+        .map(|c| linear(&ch.fixed[c], ch.formats[c]).0)
+        .collect();
+    Luma::of(
+        ch.lane,
+        std::array::from_fn(|c| codes[c].frame.acc.as_slice()),
+        std::array::from_fn(|c| ch.float[c].as_slice()),
+        std::array::from_fn(|c| ch.formats[c]),
+        g,
+    )
 }
 
 /// The per-pixel scatter of the fixed input frame (every pixel spread with the mask of its

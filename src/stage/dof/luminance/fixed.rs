@@ -175,7 +175,7 @@ pub fn pre_blur_fixed(
                 work.pre.add_overflows(1);
                 if p.overflow == Overflow::Error {
                     return Err(Error::Overflow {
-                        signal: "dof.lum.pre".into(),
+                        signal: work.pre.name.clone(),
                         format: format!("UQ{}.0", p.pre_bits),
                         value: s as i128,
                         min: 0,
@@ -230,23 +230,38 @@ pub const NEIGHBOURS: [(i64, i64); 8] = [
 /// the numerator `2 (W + g) + 3` bits), stored in the mean format with SAT (signal
 /// `dof.lum.blur`; a weighted mean of values of that format fits it, so SAT does not act).
 pub fn bleed_fixed(pre: &[u64], w: usize, h: usize, p: &LumParams, work: &mut LumWork) -> Vec<u64> {
+    bleed_fixed_by(pre, pre, w, h, p, work)
+}
+
+/// [`bleed_fixed`] with the weights `|Δ_i|` taken from the pre-blurred luminance `lum` and
+/// the values from the pre-blurred channel `pre` (a colour frame: one luminance, three
+/// channels). `blur = sum |Δ_i| P_i / sum |Δ_i|`, `P_c` when no neighbour is brighter.
+pub fn bleed_fixed_by(
+    lum: &[u64],
+    pre: &[u64],
+    w: usize,
+    h: usize,
+    p: &LumParams,
+    work: &mut LumWork,
+) -> Vec<u64> {
     let bq = Quantizer::new(p.mean_format(), p.quant, Overflow::Sat);
     let mut out = vec![0u64; w * h];
     for y in 0..h {
         for x in 0..w {
-            let c = pre[y * w + x];
+            let c = lum[y * w + x];
             let (mut num, mut den) = (0u128, 0u128);
             for (dx, dy) in NEIGHBOURS {
                 let (xx, yy) = (x as i64 + dx, y as i64 + dy);
                 if xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
                     continue;
                 }
-                let v = pre[yy as usize * w + xx as usize];
-                let wt = u128::from(v.saturating_sub(c));
-                num += wt * u128::from(v);
+                let i = yy as usize * w + xx as usize;
+                let wt = u128::from(lum[i].saturating_sub(c));
+                num += wt * u128::from(pre[i]);
                 den += wt;
             }
             let b = if den == 0 {
+                let c = pre[y * w + x];
                 work.blur.record_code(i128::from(c));
                 c
             } else {
@@ -316,4 +331,35 @@ pub fn luminance_fixed(
     let blur = bleed_fixed(&pre, w, h, p, &mut work);
     let out = blend_fixed(value, &blur, alpha, p, &mut work);
     Ok((out, work))
+}
+
+/// The fixed model of one channel of a colour frame: the channel's codes `value` in
+/// `p.frame`, its bleed weighted by the luminance `lum` (codes of the word `lum_frame`, which
+/// holds the guard bits already: pre-blurred with the same window, a sum `guard_bits` wider
+/// and no more guard bits). Returns the channel's output, its work and the
+/// luminance pre-blur's work (signals `dof.lum.luma.pre` and `dof.lum.luma`).
+pub fn luminance_colour_fixed(
+    value: &[u32],
+    lum: &[u32],
+    lum_frame: QFormat,
+    alpha: &[u32],
+    w: usize,
+    h: usize,
+    p: &LumParams,
+) -> Result<(Vec<u32>, LumWork, LumWork)> {
+    let mut work = LumWork::new(p);
+    let lp = LumParams {
+        frame: lum_frame,
+        pre_bits: p.pre_bits + p.guard_bits,
+        guard_bits: 0,
+        ..*p
+    };
+    let mut lwork = LumWork::new(&lp);
+    lwork.pre.name = "dof.lum.luma.pre".into();
+    lwork.mean.name = "dof.lum.luma".into();
+    let pre_y = pre_blur_fixed(lum, w, h, &lp, &mut lwork)?;
+    let pre = pre_blur_fixed(value, w, h, p, &mut work)?;
+    let blur = bleed_fixed_by(&pre_y, &pre, w, h, p, &mut work);
+    let out = blend_fixed(value, &blur, alpha, p, &mut work);
+    Ok((out, work, lwork))
 }

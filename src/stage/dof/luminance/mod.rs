@@ -1,7 +1,10 @@
 //! `dof.kind = "luminance"`: the luminance-aware blur (docs/reference.md §4, after Zhao et al.
 //! 2012 §3.3-3.4; docs/dof-luminance.md) in fixed point, with its float reference.
 //!
-//! The frame is one intensity channel, so a pixel's luminance is its code. Per pixel:
+//! A grey frame is one intensity channel, so a pixel's luminance is its code; a colour
+//! frame's luminance is the BT.601 `Y` of its R, G and B ([`luma`]), whose pre-blurred image
+//! gives the bleed weights of every channel (each channel is pre-blurred, bled with those
+//! weights and blended by itself). Per pixel:
 //! 1. **mean pre-blur** `P`: the mean of the `(2r+1)^2` window inside the image (border
 //!    renormalised by the in-image count), `r = dof.luminance.radius`;
 //! 2. **bleed** (eq. 8): over the 8 neighbours i, `Δ_i = P_c - P_i`; a neighbour counts only
@@ -25,21 +28,26 @@
 //! **Float reference** ([`float`]): the same steps in f64 with exact divides and the exact
 //! alpha of each depth code.
 //!
-//! Files: `alpha` (alpha per depth code, the ROM), `fixed`, `float`, `cost` (cost, the ROM
-//! image).
+//! Files: `alpha` (alpha per depth code, the ROM), `luma` (the luminance of a colour frame),
+//! `fixed`, `float`, `cost` (cost, the ROM image).
 
 mod alpha;
 mod cost;
 mod fixed;
 mod float;
+mod luma;
 
 pub use alpha::{AlphaMap, ROM_QUANT};
-pub use cost::{ALPHA_LINES, ALPHA_ROM, BLEED_LINES, PRE_LINES, alpha_image, cost};
-pub use fixed::{
-    LumParams, LumWork, NEIGHBOURS, bleed_fixed, blend_fixed, div_round, luminance_fixed,
-    pre_blur_fixed,
+pub use cost::{
+    ALPHA_LINES, ALPHA_ROM, BLEED_LINES, LUMA_BLEED_LINES, LUMA_PRE_LINES, PRE_LINES, alpha_image,
+    cost,
 };
-pub use float::{bleed_f64, luminance_f64, pre_blur_f64};
+pub use fixed::{
+    LumParams, LumWork, NEIGHBOURS, bleed_fixed, bleed_fixed_by, blend_fixed, div_round,
+    luminance_colour_fixed, luminance_fixed, pre_blur_fixed,
+};
+pub use float::{bleed_f64, bleed_f64_by, luminance_colour_f64, luminance_f64, pre_blur_f64};
+pub use luma::{BT601, Luma};
 
 use super::LensMap;
 use super::method::Method;
@@ -47,15 +55,50 @@ use crate::error::Result;
 use crate::stage::accumulate::Frame;
 use crate::stage::{Cost, Cx, Facts, MemImage, TokenKind, Tokens};
 use serde::Serialize;
+use std::sync::Arc;
 
-/// The luminance-aware method.
-pub struct Luminance;
+/// The luminance-aware method; on a colour frame with the frame's luminance.
+#[derive(Default)]
+pub struct Luminance {
+    /// The luminance of a colour frame (`None`: a grey frame, its own luminance).
+    pub luma: Option<Arc<Luma>>,
+}
 
-/// What the fixed model leaves: the alpha map (and ROM) of the run's lens.
+/// What the fixed model leaves: the alpha map (and ROM) of the run's lens and, for a
+/// colour frame, its luminance.
 #[derive(Clone, Debug)]
 pub struct LumPlan {
     /// Alpha per depth code.
     pub alpha: AlphaMap,
+    /// The colour frame's luminance.
+    pub luma: Option<Arc<Luma>>,
+}
+
+impl LumPlan {
+    /// The exact alpha of every pixel of `frame`.
+    fn alpha_f64(&self, frame: &Frame, lens: &LensMap) -> Vec<f64> {
+        frame
+            .depth
+            .iter()
+            .map(|&k| self.alpha.alpha_f64(lens, k))
+            .collect()
+    }
+
+    /// The float reference of a colour frame's channel: `value` (frame LSBs) with the
+    /// luminance `lum` (of the float frames, or of the fixed codes as reals for the
+    /// stage-local comparison).
+    pub fn colour_f64(
+        &self,
+        cx: &Cx,
+        frame: &Frame,
+        value: &[f64],
+        lum: &[f64],
+        lens: &LensMap,
+    ) -> Vec<f64> {
+        let a = self.alpha_f64(frame, lens);
+        let (w, h) = (frame.width as usize, frame.height as usize);
+        luminance_colour_f64(value, lum, &a, w, h, cx.hw.dof.luminance.radius as usize)
+    }
 }
 
 /// Alpha over a frame, for the report.
@@ -124,7 +167,17 @@ impl Method for Luminance {
         let p = LumParams::of(&cx.hw.dof, cx.hw.accumulate.frame.format);
         let alpha = AlphaMap::new(lens, &cx.hw.dof.luminance);
         let codes: Vec<u32> = frame.depth.iter().map(|&k| alpha.code(k)).collect();
-        let (out, work) = luminance_fixed(&frame.acc, &codes, w, h, &p)?;
+        let (out, work, luma_work) = match &self.luma {
+            None => {
+                let (out, work) = luminance_fixed(&frame.acc, &codes, w, h, &p)?;
+                (out, work, None)
+            }
+            Some(y) => {
+                let (out, work, lw) =
+                    luminance_colour_fixed(&frame.acc, &y.fixed, y.format, &codes, w, h, &p)?;
+                (out, work, Some(lw).filter(|_| y.charges()))
+            }
+        };
         let mut facts = Facts {
             work: vec![
                 ("pixels", work.pixels),
@@ -138,7 +191,15 @@ impl Method for Luminance {
         };
         facts.note("alpha", AlphaStats::of(&alpha, lens, &frame.depth, &codes));
         facts.signals = vec![work.pre, work.mean, work.blur, work.out];
-        Ok((LumPlan { alpha }, out, facts))
+        if let Some(lw) = luma_work {
+            // The shared luminance unit: three constant multiplies per pixel and its
+            // pre-blur, counted by lane 0.
+            facts.work.push(("luma_macs", 3 * work.pixels));
+            facts.work.push(("luma_pre_adds", lw.pre_adds));
+            facts.signals.extend([lw.pre, lw.mean]);
+        }
+        let luma = self.luma.clone();
+        Ok((LumPlan { alpha, luma }, out, facts))
     }
 
     fn float(
@@ -149,11 +210,7 @@ impl Method for Luminance {
         value: &[f64],
         lens: &LensMap,
     ) -> Vec<f64> {
-        let a: Vec<f64> = frame
-            .depth
-            .iter()
-            .map(|&k| plan.alpha.alpha_f64(lens, k))
-            .collect();
+        let a = plan.alpha_f64(frame, lens);
         let (w, h) = (frame.width as usize, frame.height as usize);
         luminance_f64(value, &a, w, h, cx.hw.dof.luminance.radius as usize)
     }
@@ -172,7 +229,12 @@ impl Method for Luminance {
 
     fn cost(&self, cx: &Cx, plan: &LumPlan, _: &LensMap) -> Cost {
         let p = LumParams::of(&cx.hw.dof, cx.hw.accumulate.frame.format);
-        cost(&plan.alpha, &p, u64::from(cx.layout.grid.width))
+        cost(
+            &plan.alpha,
+            &p,
+            plan.luma.as_deref(),
+            u64::from(cx.layout.grid.width),
+        )
     }
 
     fn memories(&self, _: &Cx, plan: &LumPlan, _: &LensMap) -> Vec<MemImage> {
