@@ -131,11 +131,22 @@ fn per_channel_widths_reach_their_channel() {
     // Green has one more bit than red and blue everywhere, so its frame memory is larger.
     let frame = |c: usize| rep.channels[c].stages[0].cost.storage_bits;
     assert!(frame(1) > frame(0) && frame(0) == frame(2));
-    // Each channel alone is the grey render with that channel's widths.
+    // Each channel alone is the grey render with that channel's widths, its storage, LUT
+    // bits and cycles that render's.
     for ch in 0..3 {
         let g = render(&s, &h.channel(ch));
         assert!(c.channels[ch].dac == g.dac, "channel {ch}");
+        let lane = &rep.channels[ch];
+        let geometry: u64 = ["input", "setup", "raster", "visibility"]
+            .iter()
+            .filter_map(|n| g.report.stages.iter().find(|st| st.name == *n))
+            .map(|st| st.cost.storage_bits)
+            .sum();
+        assert_eq!(lane.storage_bits + geometry, g.report.storage_bits, "{ch}");
+        assert_eq!(lane.cycles, g.report.cycles.total_cycles, "channel {ch}");
+        assert_eq!(lane.bottleneck, g.report.cycles.bottleneck);
     }
+    assert_eq!(rep.channels[0].cycles, r.report.cycles.total_cycles);
 }
 
 #[test]

@@ -9,11 +9,13 @@
 //! and the cost of three intensity datapaths.
 
 use super::cache::Cache;
-use super::report::{EndToEnd, ideal};
+use super::plan::Plan;
+use super::report::{EndToEnd, ideal, workload};
 use super::run::Step;
 use crate::colour::{self, ColourDisplay, DeltaE, HueShift, RgbCodes};
 use crate::compare::{self, DisplayModel};
 use crate::config::HwConfig;
+use crate::cycles;
 use crate::perceptual::{self, ContourReport};
 use crate::scene::Scene;
 use crate::stage::{PixelTapF, StageReport};
@@ -69,6 +71,11 @@ pub struct ChannelReport {
     pub overflows: u64,
     /// Storage bits (RAM) of the channel's lane.
     pub storage_bits: u64,
+    /// Cycles of a frame through the geometry stages and this channel's lane (the cycle
+    /// model on the lane's own tokens).
+    pub cycles: u64,
+    /// The lane's slowest stage.
+    pub bottleneck: String,
     /// LUT / ROM bits of the channel's lane.
     pub lut_bits: u64,
     /// The stages of the channel's lane (after visibility).
@@ -133,12 +140,13 @@ pub fn report(
 }
 
 /// Channel `c`'s codes and report from its lane's steps (`lane`: the stages after
-/// visibility) under its configuration `hw` (already [`HwConfig::channel`]).
+/// visibility, behind the shared `geometry` steps) under its configuration `hw` (already
+/// [`HwConfig::channel`]).
 pub fn channel(
     scene: &Scene,
     hw: &HwConfig,
     c: usize,
-    lane: &[Step],
+    (plan, geometry, lane): (&Plan, &[Step], &[Step]),
     cache: Option<&Cache>,
 ) -> (ChannelCodes, ChannelReport) {
     let (dac, dac_ref) = dac_codes(lane);
@@ -147,6 +155,13 @@ pub fn channel(
     let ideal = ideal(scene, hw, lane, cache);
     let contours = perceptual::contours(&dac, &dac_ref, &ideal.ideal, &display);
     let stages: Vec<StageReport> = lane.iter().map(|s| s.outcome.report.clone()).collect();
+    let frame: Vec<Step> = geometry.iter().chain(lane).cloned().collect();
+    let workload = workload(plan, &frame, &hw.cycles);
+    let simulate = || (cycles::simulate(&workload, None), 0.0);
+    let sim = match cache {
+        Some(k) => k.sim(workload.key(), simulate).0,
+        None => std::sync::Arc::new(simulate()),
+    };
     let report = ChannelReport {
         name: NAMES[c],
         frame: hw.accumulate.frame.format.to_string(),
@@ -163,6 +178,8 @@ pub fn channel(
             .sum(),
         storage_bits: stages.iter().map(|s| s.cost.storage_bits).sum(),
         lut_bits: stages.iter().map(|s| s.cost.lut_bits).sum(),
+        cycles: sim.0.total_cycles,
+        bottleneck: sim.0.bottleneck().to_string(),
         stages,
     };
     let codes = ChannelCodes {

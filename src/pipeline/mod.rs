@@ -151,7 +151,8 @@ fn render_on_pool(
             } else {
                 &lanes[c - 1][..]
             };
-            let (k, r) = colour::channel(scene, &hw.channel(c), c, lane, cache);
+            let parts = (&plan, &steps[..split], lane);
+            let (k, r) = colour::channel(scene, &hw.channel(c), c, parts, cache);
             codes.push(k);
             reports.push(r);
         }

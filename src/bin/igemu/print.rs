@@ -379,12 +379,12 @@ pub fn print_front(
 /// The per-channel lines of a colour render.
 fn print_colour(col: &igemu::pipeline::colour::ColourReport) -> Result<(), Error> {
     outln!(
-        "  per channel (frame word, DAC bits): identical | max |diff| | visible Weber px | contour steps fixed/float | overflows | storage bits"
+        "  per channel (frame word, DAC bits): identical | max |diff| | visible Weber px | contour steps fixed/float | overflows | storage bits | LUT bits | cycles (bottleneck)"
     );
     for ch in &col.channels {
         let (c, w, k) = (&ch.end_to_end.codes, &ch.end_to_end.weber, &ch.contours);
         outln!(
-            "    {} ({}, {} bits): {:.4}% | {} | {} | {}/{} | {} | {}",
+            "    {} ({}, {} bits): {:.4}% | {} | {} | {}/{} | {} | {} | {} | {} ({})",
             ch.name,
             ch.frame,
             ch.dac_bits,
@@ -394,7 +394,10 @@ fn print_colour(col: &igemu::pipeline::colour::ColourReport) -> Result<(), Error
             k.contour_steps,
             k.contour_steps_reference,
             ch.overflows,
-            ch.storage_bits
+            ch.storage_bits,
+            ch.lut_bits,
+            ch.cycles,
+            ch.bottleneck
         );
     }
     let (e, hue) = (&col.delta_e, &col.hue_shift);
