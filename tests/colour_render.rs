@@ -263,3 +263,40 @@ fn a_saturated_ramp_at_565_shifts_hue_that_wider_words_do_not() {
     assert!(e565.over_jnd > 0 && e888.over_jnd == 0, "{e565:?} {e888:?}");
     assert!(e565.mean > e888.mean && e888.mean > e12.mean);
 }
+
+#[test]
+fn a_log_coded_colour_sample_buffer_stores_depth_and_id_once() {
+    let mut h = HwConfig::preset("log8-logadd").expect("preset");
+    h.dof.kind = DofKind::Luminance;
+    let mut s = small_default();
+    s.image.colour = true;
+    let r = render(&s, &h);
+    let lanes = &r.colour.as_ref().unwrap().lanes;
+    let buffer = |steps: &[pipeline::Step]| {
+        let st = steps
+            .iter()
+            .find(|st| st.id.name() == "logdomain")
+            .expect("log coding");
+        let m = st
+            .outcome
+            .report
+            .cost
+            .memories
+            .iter()
+            .find(|m| m.name == igemu::stage::visibility::SAMPLE_BUFFER)
+            .expect("the sample buffer")
+            .clone();
+        for p in &st.outcome.packs {
+            assert!(p.verified && p.problem.is_none(), "{p:?}");
+        }
+        m
+    };
+    let (r0, g, b) = (buffer(&r.steps), buffer(&lanes[0]), buffer(&lanes[1]));
+    let code = h.coding.log_bits;
+    assert_eq!((g.width, b.width), (code, code), "G and B store their code");
+    assert!(r0.width > code, "R's word holds depth and id with its code");
+    assert_eq!((r0.depth, g.depth), (b.depth, b.depth));
+    // The grey render's log-coded sample word is R's.
+    let grey = render(&small_default(), &h);
+    assert_eq!(buffer(&grey.steps).width, r0.width);
+}

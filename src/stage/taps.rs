@@ -33,6 +33,9 @@ pub struct Taps {
     pub fixed: FixedTaps,
     /// The float reference's taps.
     pub float: FloatTaps,
+    /// The channel of a colour render's lane these taps belong to (0 R, 1 G, 2 B; 0 before
+    /// the lanes split and for a grey render).
+    pub lane: usize,
     /// Every channel's frame, set by the runner before a stage that reads all channels of a
     /// colour render ([`crate::stage::Stage::reads_channels`]) and dropped after it.
     pub channels: Option<Arc<ChannelFrames>>,
@@ -104,6 +107,7 @@ impl Taps {
     /// on them).
     pub fn lane(&self, c: usize) -> Taps {
         let mut t = self.clone();
+        t.lane = c;
         if c > 0 {
             t.fixed.samples = Some(self.fixed.more_samples[c - 1].clone());
             t.float.samples = Some(self.float.more_samples[c - 1].clone());

@@ -9,7 +9,7 @@ use crate::config::{CodingKind, HwConfig};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::stage::taps::{SampleCoding, SampleTap, Taps};
-use crate::stage::visibility::{sample_buffer, sample_image};
+use crate::stage::visibility::{SAMPLE_BUFFER, sample_buffer, sample_image};
 use crate::stage::{Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, Tokens};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -31,10 +31,25 @@ pub struct Encoded {
     lut: Option<Arc<PotentiationLut>>,
     stored: Arc<SampleTap>,
     prims: usize,
+    /// The colour lane (0 for grey): lanes after R store only their code in the shared
+    /// sample buffer word.
+    lane: usize,
 }
 
 /// The logdomain stage.
 pub struct Logdomain;
+
+/// The code field alone of a colour lane after R in the sample buffer (the words of
+/// [`sample_image`], one field of `bits`).
+fn code_image(stored: Arc<SampleTap>, bits: u32) -> MemImage {
+    MemImage {
+        name: SAMPLE_BUFFER.into(),
+        fields: vec![bits],
+        words: stored.samples.z.len(),
+        region_only: true,
+        get: Arc::new(move |r, _| stored.samples.i[r] as u64),
+    }
+}
 
 fn white_i(hw: &HwConfig) -> u64 {
     let f = hw.input.intensity.format;
@@ -147,6 +162,7 @@ impl Stage for Logdomain {
                 lut,
                 stored,
                 prims,
+                lane: taps.lane,
             },
             facts,
         ))
@@ -195,18 +211,21 @@ impl Stage for Logdomain {
     }
 
     /// The encoder (threshold ROM and comparator), the potentiation LUT (structure a) and the
-    /// sample buffer, which stores the log code.
+    /// sample buffer, which stores the log code. A colour render's sample word holds the
+    /// depth, the id and each channel's code once: lane R charges the depth and the id with
+    /// its code, lanes G and B their code alone.
     fn cost(&self, cx: &Cx, e: &Encoded) -> Cost {
         let ib = cx.hw.input.intensity.format.total_bits();
         let mut c = e.enc.cost();
         if let Some(l) = &e.lut {
             c = c.merge(l.cost());
         }
-        c.merge(Cost::new(
-            vec![sample_buffer(cx, e.prims, e.enc.code.bits.min(ib))],
-            vec![],
-            vec![],
-        ))
+        let code = e.enc.code.bits.min(ib);
+        let mut buffer = sample_buffer(cx, e.prims, code);
+        if e.lane > 0 {
+            buffer.width = code;
+        }
+        c.merge(Cost::new(vec![buffer], vec![], vec![]))
     }
 
     fn memories(&self, cx: &Cx, e: &Encoded, _: &Taps) -> Vec<MemImage> {
@@ -215,11 +234,12 @@ impl Stage for Logdomain {
         if let Some(l) = &e.lut {
             v.push(l.image());
         }
-        v.push(sample_image(
-            cx,
-            vec![(e.stored.clone(), e.enc.code.bits.min(ib))],
-            e.prims,
-        ));
+        let code = e.enc.code.bits.min(ib);
+        v.push(if e.lane > 0 {
+            code_image(e.stored.clone(), code)
+        } else {
+            sample_image(cx, vec![(e.stored.clone(), code)], e.prims)
+        });
         v
     }
 }
