@@ -1,8 +1,9 @@
 //! Colour through the pipeline: R, G and B share one raster and one z-buffer and run the
 //! stages after visibility once per channel. A grey scene rendered in three channels gives
 //! its grey DAC codes in every channel (so the golden hashes of the grey scenes carry over),
-//! per-channel word widths reach their channel, a flat colour field is flat in every
-//! channel, and the binary writes an RGB PNG.
+//! per-channel word widths reach their channel (with their cost and cycles), a flat colour
+//! field is flat in every channel, equal energy holds per channel, a log-coded sample word
+//! stores depth and id once, and the binary writes an RGB PNG.
 
 mod common;
 
@@ -299,4 +300,54 @@ fn a_log_coded_colour_sample_buffer_stores_depth_and_id_once() {
     // The grey render's log-coded sample word is R's.
     let grey = render(&small_default(), &h);
     assert_eq!(buffer(&grey.steps).width, r0.width);
+}
+
+/// Each channel's frame-memory total of a colour render (frame LSBs).
+fn channel_totals(r: &Render) -> [u64; 3] {
+    let lanes = &r.colour.as_ref().expect("colour").lanes;
+    std::array::from_fn(|c| {
+        let steps = if c == 0 { &r.steps } else { &lanes[c - 1] };
+        let st = steps.iter().find(|s| s.id.name() == "accumulate").unwrap();
+        st.outcome
+            .taps
+            .fixed
+            .frame()
+            .frame
+            .acc
+            .iter()
+            .map(|&a| u64::from(a))
+            .sum()
+    })
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+
+    /// Equal energy per channel: with a frame word wide enough to hold every product
+    /// exactly, a coloured one-pixel light point and a coloured quad of one pixel
+    /// accumulate the same total in each channel at every sub-pixel position (box and tent).
+    #[test]
+    fn equal_energy_holds_in_every_channel(x in 4.0f64..11.0, y in 4.0f64..11.0) {
+        let rgb = [0.7, 0.3, 0.1];
+        let point = |x: f64, y: f64| format!(
+            "[[object]]\nkind = \"light_point\"\nspace = \"screen\"\nposition = [{x}, {y}, 0.5]\nintensity = [0.7, 0.3, 0.1]\nsize = 1.0\n\n"
+        );
+        let quad = |x: f64, y: f64| {
+            let v = |a: f64, b: f64| format!("[{a}, {b}, 0.5]");
+            let (a, b, c, d) = (v(x, y), v(x + 1.0, y), v(x + 1.0, y + 1.0), v(x, y + 1.0));
+            let i = format!("[[{0}, {1}, {2}], [{0}, {1}, {2}], [{0}, {1}, {2}]]", rgb[0], rgb[1], rgb[2]);
+            format!(
+                "[[object]]\nkind = \"triangle\"\nspace = \"screen\"\nvertices = [{a}, {b}, {c}]\nintensity = {i}\n\n\
+                 [[object]]\nkind = \"triangle\"\nspace = \"screen\"\nvertices = [{a}, {c}, {d}]\nintensity = {i}\n\n"
+            )
+        };
+        for filter in ["box", "tent"] {
+            let h = hw_text(&format!("preset = \"linear12\"\n[accumulate]\nfilter = \"{filter}\"\nframe = \"UQ12.14\"\n"));
+            let totals = |objects: String| channel_totals(&render(&common::scene(16, 16, 0.0, &objects), &h));
+            let reference = totals(point(8.0, 8.0));
+            proptest::prop_assert!(reference[0] > reference[1] && reference[1] > reference[2]);
+            proptest::prop_assert_eq!(totals(point(x, y)), reference);
+            proptest::prop_assert_eq!(totals(quad(x, y)), reference);
+        }
+    }
 }
