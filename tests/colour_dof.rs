@@ -39,7 +39,7 @@ fn colour_fixed(
     let y = Luma::of(
         c,
         frames,
-        std::array::from_fn(|k| f[k].as_slice()),
+        Some(std::array::from_fn(|k| f[k].as_slice())),
         formats,
         g,
     );
@@ -106,7 +106,7 @@ proptest! {
         let a: Vec<u32> = (0..w * h).map(|_| (rng.next_u64() % (one + 1)) as u32).collect();
         let grey = luminance_fixed(&v, &a, w, h, &p).unwrap().0;
         let vf: Vec<f64> = v.iter().map(|&x| x as f64).collect();
-        let y = Luma::of(0, [&v; 3], [&vf; 3], [f; 3], g);
+        let y = Luma::of(0, [&v; 3], Some([&vf; 3]), [f; 3], g);
         let colour = luminance_colour_fixed(&v, &y.fixed, y.format, &a, w, h, &p).unwrap().0;
         prop_assert_eq!(grey, colour);
     }
@@ -149,7 +149,7 @@ fn fixed_vs_float_on_random_colour_frames() {
             let codes = std::array::from_fn(|k| frames[k].as_slice());
             let vals = std::array::from_fn(|k| ff[k].as_slice());
             for c in 0..3 {
-                let y = Luma::of(c, codes, vals, formats, 4);
+                let y = Luma::of(c, codes, Some(vals), formats, 4);
                 let p = params(formats[c], 1, 4);
                 let out = luminance_colour_fixed(&frames[c], &y.fixed, y.format, &a, w, h, &p)
                     .unwrap()
@@ -239,7 +239,7 @@ fn the_luminance_method_on_a_colour_render_blurs_each_channel_by_the_frames_lumi
     let y = Luma::of(
         0,
         codes,
-        std::array::from_fn(|k| vals[k].as_slice()),
+        Some(std::array::from_fn(|k| vals[k].as_slice())),
         [f; 3],
         g,
     );

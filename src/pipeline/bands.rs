@@ -244,7 +244,8 @@ impl Merge {
 struct Tail {
     k0: i64,
     fixed: Arc<SampleTap>,
-    float: Arc<SampleTapF>,
+    /// `None` on the fixed-only path.
+    float: Option<Arc<SampleTapF>>,
 }
 
 fn join_points<T: Copy>(
@@ -273,7 +274,13 @@ fn join_points<T: Copy>(
 /// Joins the kept rows `read..own.0` of `tail` with the band's own buffers: the sample
 /// buffer the band's filter windows read, its rows shifted up by `dk` (the band's frame
 /// starts at row 0).
-fn join(tail: Option<&Tail>, read: i64, dk: i64, own: &SampleTap, own_f: &SampleTapF) -> Tail {
+fn join(
+    tail: Option<&Tail>,
+    read: i64,
+    dk: i64,
+    own: &SampleTap,
+    own_f: Option<&SampleTapF>,
+) -> Tail {
     let reg = own.samples.reg;
     let w = reg.width();
     let kept = (reg.k0 - read) as usize * w;
@@ -292,7 +299,6 @@ fn join(tail: Option<&Tail>, read: i64, dk: i64, own: &SampleTap, own_f: &Sample
         v
     }
     let ts = tail.map(|t| &t.fixed.samples);
-    let tf = tail.map(|t| &t.float.samples);
     let fixed = SampleTap {
         samples: Samples {
             reg: joined,
@@ -308,29 +314,33 @@ fn join(tail: Option<&Tail>, read: i64, dk: i64, own: &SampleTap, own_f: &Sample
         bg: own.bg,
         coding: own.coding,
     };
-    let float = SampleTapF {
-        samples: SamplesF {
-            reg: joined,
-            z: cat(tf.map(|s| s.z.as_slice()), skip, kept, &own_f.samples.z),
-            prim: cat(
-                tf.map(|s| s.prim.as_slice()),
-                skip,
+    let float = own_f.map(|own_f| {
+        let tf = tail.and_then(|t| t.float.as_ref()).map(|f| &f.samples);
+        SampleTapF {
+            samples: SamplesF {
+                reg: joined,
+                z: cat(tf.map(|s| s.z.as_slice()), skip, kept, &own_f.samples.z),
+                prim: cat(
+                    tf.map(|s| s.prim.as_slice()),
+                    skip,
+                    kept,
+                    &own_f.samples.prim,
+                ),
+                i: cat(tf.map(|s| s.i.as_slice()), skip, kept, &own_f.samples.i),
+            },
+            points: join_points(
+                tail.and_then(|t| t.float.as_ref())
+                    .map(|f| (f.points.as_slice(), skip)),
+                &own_f.points,
                 kept,
-                &own_f.samples.prim,
             ),
-            i: cat(tf.map(|s| s.i.as_slice()), skip, kept, &own_f.samples.i),
-        },
-        points: join_points(
-            tail.map(|t| (t.float.points.as_slice(), skip)),
-            &own_f.points,
-            kept,
-        ),
-        bg: own_f.bg,
-    };
+            bg: own_f.bg,
+        }
+    });
     Tail {
         k0: read,
         fixed: Arc::new(fixed),
-        float: Arc::new(float),
+        float: float.map(Arc::new),
     }
 }
 
@@ -361,7 +371,11 @@ pub fn run(
         depth: vec![0; npix],
         coverage: vec![0; npix],
     };
-    let mut frame_f = vec![0.0; npix];
+    let mut frame_f = if opts.reference {
+        vec![0.0; npix]
+    } else {
+        Vec::new()
+    };
     let mut coding = None;
     let mut merged: Vec<Merge> = group.iter().map(|_| Merge::default()).collect();
     let mut tail: Option<Tail> = None;
@@ -391,7 +405,7 @@ pub fn run(
                     r.read,
                     dk,
                     taps.fixed.samples(),
-                    taps.float.samples(),
+                    taps.float.samples.as_deref(),
                 );
                 let rows = Region {
                     y0: b.y0,
@@ -415,7 +429,7 @@ pub fn run(
                     ..geo.clone()
                 };
                 taps.fixed.samples = Some(joined.fixed.clone());
-                taps.float.samples = Some(joined.float.clone());
+                taps.float.samples.clone_from(&joined.float);
                 tail = Some(joined);
                 &acc_layout
             } else {
@@ -439,7 +453,9 @@ pub fn run(
                 frame.acc[at..at + len].copy_from_slice(&band.frame.acc);
                 frame.depth[at..at + len].copy_from_slice(&band.frame.depth);
                 frame.coverage[at..at + len].copy_from_slice(&band.frame.coverage);
-                frame_f[at..at + len].copy_from_slice(taps.float.frame());
+                if let Some(f) = &taps.float.frame {
+                    frame_f[at..at + len].copy_from_slice(f);
+                }
                 coding = Some(band.coding.clone());
                 last_acc = Some(fixed);
             }
@@ -465,7 +481,9 @@ pub fn run(
                 ),
                 coding: coding.clone().expect("a band ran"),
             }));
-            taps.float.frame = Some(Arc::new(std::mem::take(&mut frame_f)));
+            taps.float.frame = opts
+                .reference
+                .then(|| Arc::new(std::mem::take(&mut frame_f)));
             // The memories of the whole frame, packed once.
             let cx = Cx {
                 scene,

@@ -37,16 +37,37 @@ pub struct ChannelCodes {
     pub contour_map: Vec<u8>,
 }
 
-/// The DAC codes, fixed and float, after the last of `steps`.
-pub fn dac_codes(steps: &[Step]) -> (Vec<u16>, Vec<u16>) {
+/// The overflows, storage bits and LUT bits of a lane's stage reports.
+pub fn lane_totals<'a>(
+    stages: impl IntoIterator<Item = &'a StageReport> + Clone,
+) -> (u64, u64, u64) {
+    let s = stages.clone().into_iter();
+    (
+        s.flat_map(|s| &s.signals).map(|s| s.overflows).sum(),
+        stages
+            .clone()
+            .into_iter()
+            .map(|s| s.cost.storage_bits)
+            .sum(),
+        stages.into_iter().map(|s| s.cost.lut_bits).sum(),
+    )
+}
+
+/// The fixed DAC codes after the last of `steps`.
+pub fn fixed_codes(steps: &[Step]) -> Vec<u16> {
     let taps = &steps.last().expect("a plan runs stages").outcome.taps;
-    let dac = taps
-        .fixed
+    taps.fixed
         .pixels()
         .codes
         .iter()
         .map(|&c| c as u16)
-        .collect();
+        .collect()
+}
+
+/// The DAC codes, fixed and float, after the last of `steps`.
+pub fn dac_codes(steps: &[Step]) -> (Vec<u16>, Vec<u16>) {
+    let taps = &steps.last().expect("a plan runs stages").outcome.taps;
+    let dac = fixed_codes(steps);
     let dac_ref = match taps.float.pixels() {
         PixelTapF::Codes(c) => c.iter().map(|&c| c as u16).collect(),
         PixelTapF::Values(_) => unreachable!("the last stage writes DAC codes"),
@@ -162,6 +183,7 @@ pub fn channel(
         Some(k) => k.sim(workload.key(), simulate).0,
         None => std::sync::Arc::new(simulate()),
     };
+    let (overflows, storage_bits, lut_bits) = lane_totals(&stages);
     let report = ChannelReport {
         name: NAMES[c],
         frame: hw.accumulate.frame.format.to_string(),
@@ -171,13 +193,9 @@ pub fn channel(
             weber: compare::weber(&dac, &dac_ref, &display),
         },
         contours: contours.report,
-        overflows: stages
-            .iter()
-            .flat_map(|s| &s.signals)
-            .map(|s| s.overflows)
-            .sum(),
-        storage_bits: stages.iter().map(|s| s.cost.storage_bits).sum(),
-        lut_bits: stages.iter().map(|s| s.cost.lut_bits).sum(),
+        overflows,
+        storage_bits,
+        lut_bits,
         cycles: sim.0.total_cycles,
         bottleneck: sim.0.bottleneck().to_string(),
         stages,

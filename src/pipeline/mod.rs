@@ -5,12 +5,14 @@
 //! A render is: build the plan (which stages, why, region, tiles), run the planned stages in
 //! order (each fixed model, its float reference and its stage-local comparison), compare
 //! the DAC codes end to end, and simulate the cycle model on the stages' tokens; on request
-//! compare both with the depth-of-field truth ([`truth`]).
+//! compare both with the depth-of-field truth ([`truth`]). The fixed-only fast path
+//! ([`fast`]) runs the fixed model and the cycle model alone.
 
 pub mod bands;
 pub mod cache;
 pub mod colour;
 pub mod estimate;
+pub mod fast;
 pub mod plan;
 pub mod report;
 pub mod run;

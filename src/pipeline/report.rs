@@ -166,24 +166,33 @@ pub fn workload(plan: &Plan, steps: &[Step], c: &crate::config::CyclesCfg) -> Wo
     )
 }
 
-/// Assembles the report and simulates the cycle model (reusing a cached simulation).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn build(
+/// What the fixed model's steps give without a reference: every stage's report, the totals
+/// over every channel's lane, the cycle model (reusing a cached simulation) and the timing.
+pub(super) struct Totals {
+    /// Channel 0's stage reports, in run order.
+    pub stages: Vec<StageReport>,
+    /// Overflows over every lane's signals.
+    pub overflows: u64,
+    /// RAM bits of every lane.
+    pub storage_bits: u64,
+    /// ROM / LUT bits of every lane.
+    pub lut_bits: u64,
+    /// The cycle model on channel 0's steps, with the cost summary of every lane.
+    pub cycles: CycleReport,
+    /// Its workload.
+    pub workload: Workload,
+    /// Wall times.
+    pub timing: Timing,
+}
+
+/// The [`Totals`] of a run's steps.
+pub(super) fn totals(
     scene: &Scene,
     hw: &HwConfig,
     plan: &Plan,
     (steps, lanes): (&[Step], &[Vec<Step>]),
-    dac: &[u16],
-    dac_ref: &[u16],
-    ideal: &IdealImage,
     cache: Option<&Cache>,
-    opts: crate::stage::RunOptions,
-) -> (Report, Workload, Vec<u8>) {
-    let (width, height) = (scene.image.width, scene.image.height);
-    let codes = compare::codes(dac, dac_ref, hw.gamma.dac_bits);
-    let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
-    let weber = compare::weber(dac, dac_ref, &display);
-    let contours = perceptual::contours(dac, dac_ref, ideal, &display);
+) -> Totals {
     let stages: Vec<StageReport> = steps.iter().map(|s| s.outcome.report.clone()).collect();
     // Totals over every channel's lane.
     let every: Vec<&Step> = steps.iter().chain(lanes.iter().flatten()).collect();
@@ -227,31 +236,66 @@ pub(super) fn build(
         threads: rayon::current_num_threads(),
         peak_memory_bytes: super::estimate::peak_memory(),
     };
+    Totals {
+        stages,
+        overflows,
+        storage_bits,
+        lut_bits,
+        cycles,
+        workload,
+        timing,
+    }
+}
+
+/// The scene facts of the report.
+pub(super) fn scene_info(scene: &Scene, plan: &Plan) -> SceneInfo {
+    SceneInfo {
+        name: scene.name.clone(),
+        width: scene.image.width,
+        height: scene.image.height,
+        front_end: plan.host.stats.clone(),
+    }
+}
+
+/// Assembles the report and simulates the cycle model (reusing a cached simulation).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn build(
+    scene: &Scene,
+    hw: &HwConfig,
+    plan: &Plan,
+    steps_lanes: (&[Step], &[Vec<Step>]),
+    dac: &[u16],
+    dac_ref: &[u16],
+    ideal: &IdealImage,
+    cache: Option<&Cache>,
+    opts: crate::stage::RunOptions,
+) -> (Report, Workload, Vec<u8>) {
+    let steps = steps_lanes.0;
+    let codes = compare::codes(dac, dac_ref, hw.gamma.dac_bits);
+    let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
+    let weber = compare::weber(dac, dac_ref, &display);
+    let contours = perceptual::contours(dac, dac_ref, ideal, &display);
+    let t = totals(scene, hw, plan, steps_lanes, cache);
     let report = Report {
         igemu_version: env!("CARGO_PKG_VERSION").into(),
-        scene: SceneInfo {
-            name: scene.name.clone(),
-            width,
-            height,
-            front_end: plan.host.stats.clone(),
-        },
+        scene: scene_info(scene, plan),
         hardware: hw.clone(),
         plan: plan.report(scene, hw, opts),
-        stages,
+        stages: t.stages,
         reused: steps
             .iter()
             .filter(|s| s.reused)
             .map(|s| s.id.name().to_string())
             .collect(),
         end_to_end: EndToEnd { codes, weber },
-        overflows,
-        storage_bits,
-        lut_bits,
-        timing,
-        cycles,
+        overflows: t.overflows,
+        storage_bits: t.storage_bits,
+        lut_bits: t.lut_bits,
+        timing: t.timing,
+        cycles: t.cycles,
         contours: contours.report,
         dof_truth: None,
         colour: None,
     };
-    (report, workload, contours.map)
+    (report, t.workload, contours.map)
 }

@@ -168,10 +168,11 @@ struct Lane {
 /// stage by every lane's input.
 fn share_frames(lanes: &mut [Lane]) {
     let fixed: Option<Vec<_>> = lanes.iter().map(|l| l.taps.fixed.frame.clone()).collect();
-    let float: Option<Vec<_>> = lanes.iter().map(|l| l.taps.float.frame.clone()).collect();
-    let (Some(fixed), Some(float)) = (fixed, float) else {
+    let Some(fixed) = fixed else {
         return;
     };
+    // No float frames on the fixed-only path.
+    let float: Option<Vec<_>> = lanes.iter().map(|l| l.taps.float.frame.clone()).collect();
     let formats: Vec<_> = lanes.iter().map(|l| l.hw.accumulate.frame.format).collect();
     let mut all = Fnv::new().str("channels");
     for l in lanes.iter() {
@@ -322,11 +323,15 @@ pub(super) fn execute_keep(
     let (fixed, facts) = stage.fixed(cx, &mut taps)?;
     let fixed_ms = ms_since(t);
     let mut notes = facts.notes;
+    let float_ms = if cx.opts.reference {
+        let t = Instant::now();
+        stage.float(cx, &fixed, &mut taps, &mut notes)?;
+        ms_since(t)
+    } else {
+        0.0
+    };
     let t = Instant::now();
-    stage.float(cx, &fixed, &mut taps, &mut notes)?;
-    let float_ms = ms_since(t);
-    let t = Instant::now();
-    let local = if cx.opts.stage_local {
+    let local = if cx.opts.reference && cx.opts.stage_local {
         stage.local(cx, &fixed, input, &taps, &mut notes)
     } else {
         None

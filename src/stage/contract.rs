@@ -31,6 +31,9 @@ use std::sync::Arc;
 /// Options of a run that change what the stages compute (and so key their results).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct RunOptions {
+    /// Run the float reference beside the fixed model (`false`: the fixed-only fast path,
+    /// `render --no-reference`; no float taps, no comparisons, see `pipeline::fast`).
+    pub reference: bool,
     /// Run the stage-local comparisons (float stage on the fixed stage's input).
     pub stage_local: bool,
     /// Also run the (slow) per-pixel depth-of-field reference and the layer theorem check.
@@ -55,6 +58,7 @@ pub struct RunOptions {
 impl Default for RunOptions {
     fn default() -> Self {
         Self {
+            reference: true,
             stage_local: true,
             dof_reference: false,
             max_memory: None,
@@ -65,8 +69,20 @@ impl Default for RunOptions {
 }
 
 impl RunOptions {
+    /// The fixed model only: no float reference, no comparisons, no per-pixel or truth
+    /// references (the fast path of `pipeline::fast`).
+    pub const FIXED_ONLY: RunOptions = RunOptions {
+        reference: false,
+        stage_local: false,
+        dof_reference: false,
+        max_memory: None,
+        dof_truth_samples: 0,
+        band_rows: None,
+    };
+
     /// No stage-local comparisons, no per-pixel reference: what sweeps and checks run.
     pub const FAST: RunOptions = RunOptions {
+        reference: true,
         stage_local: false,
         dof_reference: false,
         max_memory: None,

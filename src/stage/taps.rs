@@ -48,8 +48,8 @@ pub struct ChannelFrames {
     pub lane: usize,
     /// Each channel's fixed frame memory.
     pub fixed: Vec<Arc<FrameTap>>,
-    /// Each channel's float frame, in its frame LSBs.
-    pub float: Vec<Arc<Vec<f64>>>,
+    /// Each channel's float frame, in its frame LSBs (`None` on the fixed-only path).
+    pub float: Option<Vec<Arc<Vec<f64>>>>,
     /// Each channel's frame word.
     pub formats: Vec<QFormat>,
 }
@@ -110,7 +110,8 @@ impl Taps {
         t.lane = c;
         if c > 0 {
             t.fixed.samples = Some(self.fixed.more_samples[c - 1].clone());
-            t.float.samples = Some(self.float.more_samples[c - 1].clone());
+            // No float sample buffers on the fixed-only path.
+            t.float.samples = self.float.more_samples.get(c - 1).cloned();
         }
         t.fixed.more_samples.clear();
         t.float.more_samples.clear();

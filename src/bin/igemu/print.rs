@@ -6,6 +6,9 @@ use igemu::analysis::widths::RampCheck;
 use igemu::cycles::CycleReport;
 use igemu::error::Error;
 use igemu::pipeline::Report;
+use igemu::pipeline::fast::FastReport;
+use igemu::pipeline::plan::PlanReport;
+use igemu::pipeline::report::SceneInfo;
 use std::collections::BTreeMap;
 
 /// Prints the cycle report (plan, per-stage table, frame rate, cost, simulator speed).
@@ -146,17 +149,23 @@ fn fmt_work(w: &BTreeMap<String, u64>) -> String {
         .join(", ")
 }
 
-/// Prints the render report; `out` is the image written.
-pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
-    let p = &r.plan;
+/// The head of a render report: the tool, scene and hardware line, the plan and its
+/// decisions.
+fn print_head(
+    version: &str,
+    scene: &SceneInfo,
+    hw: &str,
+    threads: usize,
+    p: &PlanReport,
+) -> Result<(), Error> {
     outln!(
         "igemu {} | scene `{}` {}x{} | hardware `{}` | {} threads",
-        r.igemu_version,
-        r.scene.name,
-        r.scene.width,
-        r.scene.height,
-        r.hardware.name,
-        r.timing.threads
+        version,
+        scene.name,
+        scene.width,
+        scene.height,
+        hw,
+        threads
     );
     outln!(
         "plan: {} | region x {}..{} y {}..{} ({:.1}% of the screen) | tiles {}x{} px: {} binned | {}x{} samples/pixel | gamma {}",
@@ -184,6 +193,18 @@ pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
     for n in &p.notes {
         outln!("  note: {n}");
     }
+    Ok(())
+}
+
+/// Prints the render report; `out` is the image written.
+pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
+    print_head(
+        &r.igemu_version,
+        &r.scene,
+        &r.hardware.name,
+        r.timing.threads,
+        &r.plan,
+    )?;
     if !r.reused.is_empty() {
         outln!("reused from the cache: {}", r.reused.join(", "));
     }
@@ -289,17 +310,7 @@ pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
     if let Some(t) = &r.dof_truth {
         print_truth(t)?;
     }
-    outln!(
-        "cost: storage {} bits ({:.1} KiB), LUT/ROM {} bits | overflows {}",
-        r.storage_bits,
-        r.storage_bits as f64 / 8192.0,
-        r.lut_bits,
-        r.overflows
-    );
-    outln!();
-    print_cycles(&r.cycles)?;
-    outln!("wrote {out}");
-    Ok(())
+    print_tail((r.storage_bits, r.lut_bits, r.overflows), &r.cycles, out)
 }
 
 /// The `dof_truth` block: the truth's noise and the three-way split of the errors.
@@ -423,5 +434,67 @@ fn print_colour(col: &igemu::pipeline::colour::ColourReport) -> Result<(), Error
         col.contour_steps[0],
         col.contour_steps[1]
     );
+    Ok(())
+}
+
+/// Prints the report of a fixed-only run (`render --no-reference`): the plan, the fixed
+/// stages' times, work and overflows, each channel's lane, the cost and the cycle model.
+pub fn print_fast(r: &FastReport, out: &str) -> Result<(), Error> {
+    print_head(
+        &r.igemu_version,
+        &r.scene,
+        &r.hardware.name,
+        r.timing.threads,
+        &r.plan,
+    )?;
+    outln!("  fixed only (--no-reference): no float reference ran, nothing is compared");
+    outln!();
+    outln!("{:<11} {:>9} {:>9}  work", "stage", "fixed ms", "overflow");
+    for s in &r.stages {
+        let ov: u64 = s.signals.iter().map(|x| x.overflows).sum();
+        outln!(
+            "{:<11} {:>9.2} {:>9}  {}",
+            s.name,
+            s.fixed_ms,
+            ov,
+            fmt_work(&s.work)
+        );
+    }
+    outln!(
+        "{:<11} {:>9.2}  (host front end {:.2} ms, f64)",
+        "total",
+        r.timing.fixed_ms,
+        r.timing.host_ms
+    );
+    if !r.channels.is_empty() {
+        outln!("  per channel (frame word, DAC bits): overflows | storage bits | LUT bits");
+        for ch in &r.channels {
+            outln!(
+                "    {} ({}, {} bits): {} | {} | {}",
+                ch.name,
+                ch.frame,
+                ch.dac_bits,
+                ch.overflows,
+                ch.storage_bits,
+                ch.lut_bits
+            );
+        }
+    }
+    print_tail((r.storage_bits, r.lut_bits, r.overflows), &r.cycles, out)
+}
+
+/// The end of a render report: the cost line, the cycle report and the image written.
+fn print_tail(
+    (storage, lut, overflows): (u64, u64, u64),
+    cycles: &CycleReport,
+    out: &str,
+) -> Result<(), Error> {
+    outln!(
+        "cost: storage {storage} bits ({:.1} KiB), LUT/ROM {lut} bits | overflows {overflows}",
+        storage as f64 / 8192.0
+    );
+    outln!();
+    print_cycles(cycles)?;
+    outln!("wrote {out}");
     Ok(())
 }

@@ -308,7 +308,9 @@ fn luma_of(ch: &ChannelFrames, g: u32) -> Luma {
     Luma::of(
         ch.lane,
         std::array::from_fn(|c| codes[c].frame.acc.as_slice()),
-        std::array::from_fn(|c| ch.float[c].as_slice()),
+        ch.float
+            .as_ref()
+            .map(|f| std::array::from_fn(|c| f[c].as_slice())),
         std::array::from_fn(|c| ch.formats[c]),
         g,
     )

@@ -46,6 +46,9 @@ pub struct RenderArgs {
     /// Skip the stage-local comparisons (faster).
     #[arg(long)]
     pub no_local: bool,
+    /// The fixed model alone, with the cycle model, the cost and the overflows: no float reference and no comparison (the fast path; the image is the same).
+    #[arg(long)]
+    pub no_reference: bool,
     /// Write the banding map: the output dimmed, smooth regions lifted, visible contour steps white (8-bit PNG; one plane per channel for a colour render).
     #[arg(long)]
     pub banding_out: Option<String>,
@@ -78,6 +81,9 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         ));
     }
     let hw = a.s.hw()?;
+    if a.no_reference {
+        return run_fast(&a, &scene, &hw, &inputs);
+    }
     if a.delta_e_out.is_some() && pipeline::plan::channels(&scene, &hw) == 1 {
         return Err(arg_error(
             "--delta-e-out",
@@ -98,15 +104,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         }),
     )?;
     let (w, h) = (r.report.scene.width, r.report.scene.height);
-    let stages: Vec<_> = r
-        .steps
-        .iter()
-        .map(|s| (s.id, &s.outcome.report.cost, s.outcome.images.as_slice()))
-        .collect();
-    if rom_dir.is_some() {
-        // The hex files' names are known once the plan has run: checked before any write.
-        check_outputs(&a, &inputs, &igemu::cost::rom::files(&stages))?;
-    }
+    let stages = rom_stages(&a, &inputs, &r.steps)?;
     write_image(&a.out, &r, false)?;
     if let Some(p) = &a.reference_out {
         write_image(p, &r, true)?;
@@ -154,26 +152,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
     if let (Some(p), Some(c)) = (&a.delta_e_out, &r.colour) {
         output::write_rgb8(p, &igemu::colour::delta_e_image(&c.delta_e, w, h), w, h)?;
     }
-    for (tap, path) in &a.dump {
-        let taps = r.taps(tap.stage).ok_or_else(|| {
-            arg_error(
-                "--dump",
-                format!(
-                    "stage `{}` is not in the plan of this render: {}",
-                    tap.stage,
-                    r.plan
-                        .decisions
-                        .iter()
-                        .find(|d| d.stage == tap.stage)
-                        .map_or("", |d| d.need.reason.as_str())
-                ),
-            )
-        })?;
-        let codes = taps
-            .image(tap.plane)
-            .expect("the planes of a stage are on its taps");
-        output::write_raw16(path, &codes, w, h)?;
-    }
+    write_dumps(&a, &r.plan, &r.steps, (w, h))?;
     if let Some(dir) = rom_dir {
         igemu::cost::rom::write(dir, &stages)?;
     }
@@ -190,6 +169,113 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
         print_report(&r.report, &a.out)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `render --no-reference`: the fixed model alone ([`pipeline::fast`]); the outputs that
+/// need the float reference are refused naming the flag.
+fn run_fast(
+    a: &RenderArgs,
+    scene: &igemu::scene::Scene,
+    hw: &igemu::config::HwConfig,
+    inputs: &Inputs,
+) -> Result<ExitCode, Error> {
+    for (flag, given) in [
+        ("--reference-out", a.reference_out.is_some()),
+        ("--diff-out", a.diff_out.is_some()),
+        ("--banding-out", a.banding_out.is_some()),
+        ("--delta-e-out", a.delta_e_out.is_some()),
+        ("--html", a.html.is_some()),
+        ("--dof-reference", a.dof_reference),
+        ("--dof-truth", a.truth.samples() > 0),
+    ] {
+        if given {
+            return Err(arg_error(
+                flag,
+                format!(
+                    "{flag} compares with the float reference, which --no-reference does not run: drop one of the two"
+                ),
+            ));
+        }
+    }
+    let e = pipeline::fast::emulate(scene, hw, a.s.opts(RunOptions::FIXED_ONLY), None)?;
+    let (w, h) = (e.report.scene.width, e.report.scene.height);
+    let stages = rom_stages(a, inputs, &e.steps)?;
+    match e.channels.as_slice() {
+        [r, g, b] => output::write_rgb(&a.out, [r, g, b], [e.bits[0], e.bits[1], e.bits[2]], w, h)?,
+        planes => output::write_dac(&a.out, &planes[0], w, h, e.bits[0])?,
+    }
+    write_dumps(a, &e.plan, &e.steps, (w, h))?;
+    if let Some(dir) = &a.rom_out {
+        igemu::cost::rom::write(std::path::Path::new(dir), &stages)?;
+    }
+    let json = serde_json::to_string_pretty(&e.report).expect("serialisable");
+    if let Some(p) = &a.report {
+        output::write_file(p, &json)?;
+    }
+    if a.json {
+        outln!("{json}");
+    } else {
+        crate::print::print_fast(&e.report, &a.out)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The stages' costs and memory images for `--rom-out`, whose file names are checked
+/// against the other outputs and the inputs before any write.
+fn rom_stages<'a>(
+    a: &RenderArgs,
+    inputs: &Inputs,
+    steps: &'a [pipeline::Step],
+) -> Result<RomStages<'a>, Error> {
+    let stages: RomStages = steps
+        .iter()
+        .map(|s| (s.id, &s.outcome.report.cost, s.outcome.images.as_slice()))
+        .collect();
+    if a.rom_out.is_some() {
+        // The hex files' names are known once the plan has run: checked before any write.
+        check_outputs(a, inputs, &igemu::cost::rom::files(&stages))?;
+    }
+    Ok(stages)
+}
+
+/// Each stage's cost and memory images.
+type RomStages<'a> = Vec<(
+    igemu::stage::StageId,
+    &'a igemu::stage::Cost,
+    &'a [igemu::stage::MemImage],
+)>;
+
+/// Writes the `--dump` taps of a run's steps.
+fn write_dumps(
+    a: &RenderArgs,
+    plan: &pipeline::Plan,
+    steps: &[pipeline::Step],
+    (w, h): (u32, u32),
+) -> Result<(), Error> {
+    for (tap, path) in &a.dump {
+        let taps = steps
+            .iter()
+            .find(|s| s.id == tap.stage)
+            .map(|s| &s.outcome.taps)
+            .ok_or_else(|| {
+                arg_error(
+                    "--dump",
+                    format!(
+                        "stage `{}` is not in the plan of this render: {}",
+                        tap.stage,
+                        plan.decisions
+                            .iter()
+                            .find(|d| d.stage == tap.stage)
+                            .map_or("", |d| d.need.reason.as_str())
+                    ),
+                )
+            })?;
+        let codes = taps
+            .image(tap.plane)
+            .expect("the planes of a stage are on its taps");
+        output::write_raw16(path, &codes, w, h)?;
+    }
+    Ok(())
 }
 
 /// Writes the render's image (or its float reference): an RGB PNG of the channels' DAC

@@ -35,20 +35,21 @@ pub struct Luma {
     pub shifts: [u32; 3],
     /// Y of the fixed frames, codes of [`Luma::format`].
     pub fixed: Vec<u32>,
-    /// Y of the float frames (exact, after the same shifts), in LSBs of that word.
+    /// Y of the float frames (exact, after the same shifts), in LSBs of that word (empty
+    /// on the fixed-only path).
     pub float: Vec<f64>,
     /// Y of the fixed frames' codes as reals (exact): the stage-local comparison's input.
     pub local: Vec<f64>,
 }
 
 impl Luma {
-    /// The luminance of the channel frames `codes` (fixed) and `values` (float), each
-    /// channel in its frame word `formats`, with `g` guard bits, for the lane of channel
-    /// `lane`.
+    /// The luminance of the channel frames `codes` (fixed) and `values` (float; `None` on
+    /// the fixed-only path), each channel in its frame word `formats`, with `g` guard bits,
+    /// for the lane of channel `lane`.
     pub fn of(
         lane: usize,
         codes: [&[u32]; 3],
-        values: [&[f64]; 3],
+        values: Option<[&[f64]; 3]>,
         formats: [QFormat; 3],
         g: u32,
     ) -> Self {
@@ -81,14 +82,16 @@ impl Luma {
             local.push(sum as f64 * unit);
         }
         let scale = shifts.map(|s| (1u64 << s) as f64);
-        let float = (0..n)
-            .map(|i| {
-                (0..3)
-                    .map(|c| BT601[c] as f64 * values[c][i] * scale[c])
-                    .sum::<f64>()
-                    * unit
-            })
-            .collect();
+        let float = values.map_or_else(Vec::new, |values| {
+            (0..n)
+                .map(|i| {
+                    (0..3)
+                        .map(|c| BT601[c] as f64 * values[c][i] * scale[c])
+                        .sum::<f64>()
+                        * unit
+                })
+                .collect()
+        });
         Self {
             lane,
             format,
@@ -115,7 +118,7 @@ mod tests {
         let codes: Vec<u32> = (0..4096).collect();
         let vals: Vec<f64> = codes.iter().map(|&c| f64::from(c) + 0.25).collect();
         for g in [0, 4, 9] {
-            let y = Luma::of(0, [&codes; 3], [&vals; 3], [f; 3], g);
+            let y = Luma::of(0, [&codes; 3], Some([&vals; 3]), [f; 3], g);
             let want: Vec<u32> = codes.iter().map(|&c| c << g).collect();
             assert_eq!(y.fixed, want);
             assert_eq!(y.shifts, [0; 3]);
@@ -131,7 +134,7 @@ mod tests {
         let y = Luma::of(
             1,
             [&[31], &[0], &[0]],
-            [&[31.0], &[0.0], &[0.0]],
+            Some([&[31.0], &[0.0], &[0.0]]),
             [f5, f6, f5],
             2,
         );
