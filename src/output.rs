@@ -295,6 +295,13 @@ pub fn write_rgb(
     }
 }
 
+/// Three planes of one 8-bit value per pixel interleaved as R, G, B (for [`write_rgb8`]).
+pub fn interleave(planes: &[Vec<u8>]) -> Vec<u8> {
+    (0..planes[0].len())
+        .flat_map(|p| planes.iter().map(move |m| m[p]))
+        .collect()
+}
+
 /// Writes 8-bit RGB values as they are (`data` interleaved R, G, B per pixel).
 pub fn write_rgb8(path: &str, data: &[u8], width: u32, height: u32) -> Result<()> {
     save(

@@ -2,8 +2,9 @@
 //! `igemu render --html` and `igemu sweep --html` write and checks that every image decodes
 //! (complete, natural width and height > 0), that no request leaves the file (every request
 //! is the file itself or a `data:` URI), that no console error, log error or uncaught
-//! exception occurs, and that the sweep table sorts; it saves a screenshot of each page as
-//! a test artefact (`target/tmp/browser/*.png`).
+//! exception occurs, that the sweep table sorts, and that a colour render's page shows its
+//! images in colour with the CIEDE2000 heat map; it saves a screenshot of each page as a
+//! test artefact (`target/tmp/browser/*.png`, `target/tmp/browser-colour/*.png`).
 //!
 //! Chromium is found at `IGEMU_CHROMIUM`, else `/usr/bin/chromium` or on `PATH`. Without
 //! it the test prints a loud SKIP line and passes, unless `IGEMU_REQUIRE_BROWSER=1` (set by
@@ -181,19 +182,64 @@ fn open_and_check(browser: &Browser, file: &Path, images: usize, shot: &Path) ->
     tab
 }
 
-#[test]
-fn html_reports_open_in_a_browser_without_errors() {
-    let Some(chrome) = chromium() else {
-        let line = "SKIP tests/browser.rs: Chromium not installed (apt-get install chromium, or set IGEMU_CHROMIUM): the HTML reports were NOT opened in a browser";
+/// Chromium, or `None` after a loud SKIP line (a failure under `IGEMU_REQUIRE_BROWSER=1`).
+fn chromium_or_skip(test: &str) -> Option<PathBuf> {
+    let chrome = chromium();
+    if chrome.is_none() {
+        let line = format!(
+            "SKIP tests/browser.rs {test}: Chromium not installed (apt-get install chromium, or set IGEMU_CHROMIUM): the HTML reports were NOT opened in a browser"
+        );
         if std::env::var(REQUIRE).is_ok_and(|v| v == "1") {
             panic!("{line}; {REQUIRE}=1 requires it");
         }
         eprintln!("\n*** {line} ***\n");
-        return;
-    };
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("browser");
+    }
+    chrome
+}
+
+/// An empty folder `name` for a test's files.
+fn fresh_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Headless Chromium with its profile in `dir`.
+fn launch(chrome: PathBuf, dir: &Path) -> Browser {
+    // Background services off: the machine may have no network, and none is needed.
+    let args: Vec<&OsStr> = [
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+    ]
+    .iter()
+    .map(OsStr::new)
+    .collect();
+    Browser::new(
+        LaunchOptions::default_builder()
+            .path(Some(chrome))
+            .headless(true)
+            .sandbox(false)
+            .window_size(Some((1400, 2400)))
+            .user_data_dir(Some(dir.join("profile")))
+            .args(args)
+            .idle_browser_timeout(Duration::from_secs(120))
+            .build()
+            .expect("launch options"),
+    )
+    .expect("Chromium starts")
+}
+
+#[test]
+fn html_reports_open_in_a_browser_without_errors() {
+    let Some(chrome) = chromium_or_skip("html_reports_open_in_a_browser_without_errors") else {
+        return;
+    };
+    let dir = fresh_dir("browser");
     let truth = ["--dof-truth", "--lens-samples", "8"];
     igemu(
         &[&["render", "-o", "r.png", "--html", "r.html"][..], &truth].concat(),
@@ -225,32 +271,7 @@ fn html_reports_open_in_a_browser_without_errors() {
         ],
         &dir,
     );
-    let profile = dir.join("profile");
-    // Background services off: the machine may have no network, and none is needed.
-    let args: Vec<&OsStr> = [
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-    ]
-    .iter()
-    .map(OsStr::new)
-    .collect();
-    let browser = Browser::new(
-        LaunchOptions::default_builder()
-            .path(Some(chrome))
-            .headless(true)
-            .sandbox(false)
-            .window_size(Some((1400, 2400)))
-            .user_data_dir(Some(profile))
-            .args(args)
-            .idle_browser_timeout(Duration::from_secs(120))
-            .build()
-            .expect("launch options"),
-    )
-    .expect("Chromium starts");
+    let browser = launch(chrome, &dir);
 
     // The render: 4 pictures (fixed, reference, difference, banding), the truth and the
     // difference to it, the layer map of the thin-lens default scene, and 4 plots (LUT,
@@ -297,4 +318,87 @@ fn html_reports_open_in_a_browser_without_errors() {
         "document.querySelectorAll('#rows-table tr.front').length",
     );
     assert!(front.as_u64().unwrap_or(0) >= 1, "the front is highlighted");
+}
+
+/// A colour render's page in the browser: the fixed and float images in RGB (the fixed one
+/// not grey), a difference map per channel, the CIEDE2000 heat map (not all black) with its
+/// four-stop legend, and one line per channel.
+#[test]
+fn a_colour_render_opens_in_colour_with_its_delta_e_map() {
+    let Some(chrome) = chromium_or_skip("a_colour_render_opens_in_colour_with_its_delta_e_map")
+    else {
+        return;
+    };
+    let dir = fresh_dir("browser-colour");
+    // The embedded default-colour scene at a quarter of its size.
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/scene/default-colour.toml");
+    let text = std::fs::read_to_string(scene).expect("the scene file");
+    let small =
+        text.replacen("width = 640", "width = 160", 1)
+            .replacen("height = 480", "height = 120", 1);
+    assert!(small.contains("width = 160") && small.contains("height = 120"));
+    std::fs::write(dir.join("colour.toml"), small).unwrap();
+    igemu(
+        &["render", "colour.toml", "-o", "c.png", "--html", "c.html"],
+        &dir,
+    );
+    let browser = launch(chrome, &dir);
+    // 7 pictures (fixed and reference in RGB, a difference per channel, the banding map, the
+    // layer map), the CIEDE2000 heat map and 4 plots.
+    let tab = open_and_check(
+        &browser,
+        &dir.join("c.html"),
+        12,
+        &dir.join("render-colour.png"),
+    );
+    let js = r#"(() => {
+        const img = alt => Array.from(document.images).find(i => i.alt === alt);
+        const pixels = alt => {
+            const i = img(alt), c = document.createElement('canvas');
+            c.width = i.naturalWidth; c.height = i.naturalHeight;
+            const x = c.getContext('2d');
+            x.drawImage(i, 0, 0);
+            return x.getImageData(0, 0, c.width, c.height).data;
+        };
+        const count = (d, f) => { let n = 0; for (let k = 0; k < d.length; k += 4) if (f(d[k], d[k + 1], d[k + 2])) n++; return n; };
+        return JSON.stringify({
+            section: !!document.getElementById('colour'),
+            alts: Array.from(document.images).map(i => i.alt),
+            not_grey: count(pixels('fixed pipeline'), (r, g, b) => r !== g || g !== b),
+            heat_lit: count(pixels('CIEDE2000 heat map'), (r, g, b) => r + g + b > 0),
+            legend: Array.from(img('CIEDE2000 heat map').closest('figure').querySelectorAll('.legend span')).map(s => s.textContent),
+            channels: document.querySelectorAll('#colour-channels tr').length - 1,
+        });
+    })()"#;
+    let v: serde_json::Value =
+        serde_json::from_str(eval(&tab, js).as_str().expect("a JSON string")).unwrap();
+    eprintln!("browser: colour page: {v}");
+    assert_eq!(v["section"], true, "{v}");
+    for alt in [
+        "fixed pipeline",
+        "float reference",
+        "difference, channel R",
+        "difference, channel G",
+        "difference, channel B",
+        "CIEDE2000 heat map",
+    ] {
+        assert!(
+            v["alts"].as_array().unwrap().iter().any(|a| a == alt),
+            "no image `{alt}`: {v}"
+        );
+    }
+    assert!(
+        v["not_grey"].as_u64().unwrap() > 0,
+        "the fixed image is grey: {v}"
+    );
+    assert!(
+        v["heat_lit"].as_u64().unwrap() > 0,
+        "the heat map is all black: {v}"
+    );
+    assert_eq!(
+        v["legend"],
+        serde_json::json!(["0", "1", "2.3: the JND", "5 and above"]),
+        "{v}"
+    );
+    assert_eq!(v["channels"], 3, "{v}");
 }

@@ -3,7 +3,8 @@
 //! its grey DAC codes in every channel (so the golden hashes of the grey scenes carry over),
 //! per-channel word widths reach their channel (with their cost and cycles), a flat colour
 //! field is flat in every channel, equal energy holds per channel, a log-coded sample word
-//! stores depth and id once, and the binary writes an RGB PNG.
+//! stores depth and id once, the binary writes an RGB PNG, and the HTML report shows the
+//! render in colour.
 
 mod common;
 
@@ -350,4 +351,76 @@ proptest::proptest! {
             proptest::prop_assert_eq!(totals(quad(x, y)), reference);
         }
     }
+}
+
+/// The decoded pixels of an HTML picture's `data:image/png;base64,...` URI.
+fn decode_picture(uri: &str) -> image::DynamicImage {
+    use base64::Engine;
+    let b64 = uri.strip_prefix("data:image/png;base64,").expect("a PNG");
+    let png = base64::engine::general_purpose::STANDARD
+        .decode(b64)
+        .expect("base64");
+    image::load_from_memory(&png).expect("a PNG decodes")
+}
+
+/// The HTML report of a colour render shows it in colour (RGB images, each channel's
+/// difference, the CIEDE2000 heat map with its legend, the colour figures and one line per
+/// channel); a grey render's page has no colour section. Runs without a browser
+/// (tests/browser.rs opens the page in Chromium).
+#[test]
+fn the_html_report_of_a_colour_render_shows_colour_and_a_grey_one_does_not() {
+    let mut s = Scene::embedded("default-colour").expect("embedded");
+    (s.image.width, s.image.height) = (160, 120);
+    let h = hw_text("[accumulate]\nframe = [\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"]\n");
+    let r = render(&s, &h);
+    let html = igemu::html::render_page(&s, &h, &r, "c.html").unwrap_or_else(|e| panic!("{e}"));
+    for needle in [
+        "<h2 id=\"colour\">Colour</h2>",
+        "alt=\"fixed pipeline\"",
+        "alt=\"float reference\"",
+        "alt=\"difference, channel R\"",
+        "alt=\"difference, channel G\"",
+        "alt=\"difference, channel B\"",
+        "alt=\"CIEDE2000 heat map\"",
+        "R, G and B DAC codes (8-8-8 bits)",
+        "#0000ff\"></i>1<",
+        "2.3: the JND",
+        "5 and above",
+        "CIEDE2000 p99",
+        "hue shift mean",
+        "contour steps over R, G, B",
+        "identical DAC codes, channel R",
+    ] {
+        assert!(html.contains(needle), "the colour page lacks {needle:?}");
+    }
+    let table = &html[html.find("id=\"colour-channels\"").expect("channel table")..];
+    let table = &table[..table.find("</table>").unwrap()];
+    for (name, frame) in [("R", "UQ5.0"), ("G", "UQ6.0"), ("B", "UQ5.0")] {
+        let row = format!("<td class=\"t\">{name}</td><td class=\"t\">{frame}</td>");
+        assert!(table.contains(&row), "{row}: {table}");
+    }
+    // The pictures are RGB: the fixed image is not grey, the heat map is the one
+    // `--delta-e-out` writes.
+    let page = igemu::html::render::page(&s, &h, &r).unwrap();
+    let fixed = decode_picture(&page.pictures[0].uri);
+    assert_eq!(page.pictures[0].title, "fixed pipeline");
+    assert_eq!(fixed.color(), image::ColorType::Rgb8);
+    assert!(fixed.to_rgb8().pixels().any(|p| p[0] != p[1]), "grey");
+    let colour = page.colour.as_ref().expect("a colour section");
+    let heat = decode_picture(&colour.delta_e.uri).to_rgb8().into_raw();
+    let c = r.colour.as_ref().unwrap();
+    assert_eq!(heat, igemu::colour::delta_e_image(&c.delta_e, 160, 120));
+    assert_eq!(colour.channels.len(), 3);
+
+    let grey = small_default();
+    let hg = HwConfig::default_config();
+    let g = render(&grey, &hg);
+    let html = igemu::html::render_page(&grey, &hg, &g, "g.html").unwrap();
+    for needle in ["id=\"colour", "CIEDE2000", "channel R", "channel G"] {
+        assert!(!html.contains(needle), "the grey page has {needle:?}");
+    }
+    let page = igemu::html::render::page(&grey, &hg, &g).unwrap();
+    assert!(page.colour.is_none());
+    let fixed = decode_picture(&page.pictures[0].uri);
+    assert_eq!(fixed.color(), image::ColorType::L8);
 }

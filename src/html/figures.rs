@@ -39,6 +39,12 @@ const SIZE: (u32, u32) = (620, 400);
 /// Every plot of render `r`.
 pub fn plots(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
     let mut v = Vec::new();
+    // A colour render's LUT and code differences are channel R's.
+    let of_r = if r.colour.is_some() {
+        "channel R: "
+    } else {
+        ""
+    };
     // The gamma LUT transfer (the paper's Fig. 6): this render's LUT, the ideal I^(1/gamma)
     // of a linear code, and for a log code of the scene's contrast the LUT of eq. 15 with
     // the brightness its codes stand for.
@@ -88,7 +94,7 @@ pub fn plots(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
     let svg = plots::curves(&f, &series).map_err(|e| plot_error("LUT", e))?;
     v.push(svg_picture(
         &f.title,
-        "the LUT's output against its input, both normalised (the paper's Fig. 6)".into(),
+        format!("{of_r}the LUT's output against its input, both normalised (the paper's Fig. 6)"),
         svg,
         SIZE,
     ));
@@ -110,7 +116,7 @@ pub fn plots(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
     let svg = plots::histogram(&f, &bars).map_err(|e| plot_error("histogram", e))?;
     v.push(svg_picture(
         &f.title,
-        "pixels per difference, logarithmic count".into(),
+        format!("{of_r}pixels per difference, logarithmic count"),
         svg,
         SIZE,
     ));

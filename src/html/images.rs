@@ -1,6 +1,7 @@
 //! The pictures of the HTML report as inline PNG data (`data:image/png;base64,...`): DAC
-//! codes as grey levels, the signed difference as a heat map with its legend, the banding
-//! map and the depth-of-field layer map.
+//! codes as grey levels or, for a colour render, as RGB; the signed difference as a heat map
+//! with its legend, the banding map, the depth-of-field layer map and the legend of the
+//! CIEDE2000 heat map.
 
 use base64::Engine;
 use image::{ExtendedColorType, ImageEncoder, codecs::png::PngEncoder};
@@ -21,6 +22,41 @@ pub struct Picture {
     pub height: u32,
     /// Colour keys (empty: a grey picture whose caption says what the levels are).
     pub legend: Vec<Key>,
+}
+
+impl Picture {
+    /// A picture of 8-bit grey pixels (`rgb` false) or interleaved RGB ones, `size` = width
+    /// and height.
+    pub fn png(
+        title: &str,
+        caption: String,
+        data: &[u8],
+        size: (u32, u32),
+        rgb: bool,
+        legend: Vec<Key>,
+    ) -> Picture {
+        Picture {
+            title: title.into(),
+            caption,
+            uri: png_uri(data, size.0, size.1, rgb),
+            width: size.0,
+            height: size.1,
+            legend,
+        }
+    }
+
+    /// The difference heat map of `fixed` minus `reference` codes with its legend; `caption`
+    /// gets the largest `|diff|`.
+    pub fn diff(
+        title: &str,
+        caption: impl Fn(i32) -> String,
+        fixed: &[u16],
+        reference: &[u16],
+        size: (u32, u32),
+    ) -> Picture {
+        let (rgb, max) = diff_map(fixed, reference);
+        Picture::png(title, caption(max), &rgb, size, true, diff_legend(max))
+    }
 }
 
 /// One colour of a legend.
@@ -64,6 +100,13 @@ pub fn grey(codes: &[u16], bits: u32) -> Vec<u8> {
         .iter()
         .map(|&c| (c as f64 * 255.0 / max).round() as u8)
         .collect()
+}
+
+/// Three planes of DAC codes, each of its own width `bits`, as interleaved 8-bit RGB (each
+/// channel scaled as in [`grey`]).
+pub fn rgb(planes: [&[u16]; 3], bits: [u32; 3]) -> Vec<u8> {
+    let grey: Vec<Vec<u8>> = (0..3).map(|c| grey(planes[c], bits[c])).collect();
+    crate::output::interleave(&grey)
 }
 
 fn hex(c: [u8; 3]) -> String {
@@ -113,6 +156,26 @@ pub fn diff_legend(max: i32) -> Vec<Key> {
         .map(|d| Key {
             colour: hex(diff_colour(d, max)),
             label: format!("{d:+}"),
+        })
+        .collect()
+}
+
+/// The legend of the CIEDE2000 heat map ([`crate::colour::HEAT_STOPS`]): one key per stop,
+/// the colour in between interpolated.
+pub fn delta_e_legend() -> Vec<Key> {
+    let stops = crate::colour::HEAT_STOPS;
+    stops
+        .iter()
+        .enumerate()
+        .map(|(i, &(e, c))| Key {
+            colour: hex(c),
+            label: if i + 1 == stops.len() {
+                format!("{e} and above")
+            } else if (f64::from(e) - crate::colour::JND).abs() < 1e-6 {
+                format!("{e}: the JND")
+            } else {
+                e.to_string()
+            },
         })
         .collect()
 }
@@ -213,6 +276,16 @@ mod tests {
         assert_eq!(legend.len(), 9);
         assert_eq!(legend[4].label, "+0");
         assert_eq!(diff_legend(100).len(), 9);
+    }
+
+    #[test]
+    fn rgb_scales_each_channel_from_its_own_width() {
+        let rgb = rgb([&[31, 0], &[0, 32], &[0, 31]], [5, 6, 5]);
+        assert_eq!(rgb, [255, 0, 0, 0, 130, 255]);
+        let legend = delta_e_legend();
+        let labels: Vec<&str> = legend.iter().map(|k| k.label.as_str()).collect();
+        assert_eq!(labels, ["0", "1", "2.3: the JND", "5 and above"]);
+        assert_eq!(legend[1].colour, "#0000ff");
     }
 
     #[test]

@@ -6,13 +6,16 @@
 //! Content-Security-Policy forbids any other source, so the file can be mailed or attached
 //! to a review and opens without a network. The text and JSON outputs are not changed by it.
 //!
-//! * [`images`]: DAC codes, the difference heat map with its legend, the banding map and the
-//!   depth-of-field layer map, as PNG data.
+//! * [`images`]: DAC codes (grey, or RGB for a colour render), the difference heat map with
+//!   its legend, the banding map, the depth-of-field layer map and the CIEDE2000 legend, as
+//!   PNG data.
+//! * [`colour`]: a colour render's RGB pictures, its CIEDE2000 heat map and colour figures.
 //! * [`plots`]: the gamma LUT's transfer (the paper's Fig. 6), the histogram of code
 //!   differences, each stage's state timeline, sigma against depth.
 //! * [`timeline`]: the cycle simulation's trace binned per stage.
 //! * [`render`] and [`sweep`]: what each page shows, gathered into the templates' context.
 
+pub mod colour;
 pub mod figures;
 pub mod images;
 pub mod plots;

@@ -1,6 +1,7 @@
 //! What the HTML report of one render shows, gathered from the [`Render`]: the pictures,
 //! the plan, the per-stage table with each stage's signals, the cycle summary and the plots.
 
+use super::colour::{self, ColourSection};
 use super::figures;
 use super::images::{self, LayerKey, Picture};
 use crate::analysis::ranges::narrowest;
@@ -22,6 +23,8 @@ pub struct RenderPage {
     pub facts: Vec<(String, String)>,
     /// Images side by side.
     pub pictures: Vec<Picture>,
+    /// A colour render's CIEDE2000 map and colour figures (`None`: a grey render).
+    pub colour: Option<ColourSection>,
     /// Plan: stages in run order.
     pub plan_line: String,
     /// Every stage in or out, with why.
@@ -115,21 +118,27 @@ pub fn page(scene: &Scene, hw: &HwConfig, r: &Render) -> figures::Result<RenderP
     let rep = &r.report;
     let (w, h) = (rep.scene.width, rep.scene.height);
     let e = &rep.end_to_end;
-    let facts = vec![
+    // A colour render's end-to-end figures are channel R's (the colour section has each
+    // channel's).
+    let of_r = |k: &str| match rep.colour {
+        Some(_) => format!("{k}, channel R"),
+        None => k.to_string(),
+    };
+    let mut facts = vec![
         ("scene".into(), format!("{} {w}x{h}", rep.scene.name)),
         ("hardware".into(), rep.hardware.name.clone()),
         (
-            "identical DAC codes".into(),
+            of_r("identical DAC codes"),
             format!("{:.4}%", 100.0 * e.codes.identical_fraction),
         ),
-        ("max |diff|".into(), e.codes.max_abs_diff.to_string()),
-        ("mean diff".into(), format!("{:+.5}", e.codes.mean_diff)),
+        (of_r("max |diff|"), e.codes.max_abs_diff.to_string()),
+        (of_r("mean diff"), format!("{:+.5}", e.codes.mean_diff)),
         (
-            "visible (Weber > delta)".into(),
+            of_r("visible (Weber > delta)"),
             format!("{:.4}% of pixels", 100.0 * e.weber.over_delta_fraction),
         ),
         (
-            "visible contours".into(),
+            of_r("visible contours"),
             format!(
                 "{} steps (float reference {})",
                 rep.contours.contour_steps, rep.contours.contour_steps_reference
@@ -144,12 +153,16 @@ pub fn page(scene: &Scene, hw: &HwConfig, r: &Render) -> figures::Result<RenderP
             ),
         ),
     ];
+    if let Some(c) = &rep.colour {
+        facts.insert(2, ("colour".into(), colour::headline(c)));
+    }
     let plan = &rep.plan;
     Ok(RenderPage {
         title: format!("igemu render: {} on {}", rep.scene.name, rep.hardware.name),
         version: rep.igemu_version.clone(),
         facts,
         pictures: pictures(r, w, h),
+        colour: colour::section(r, (w, h)),
         plan_line: format!(
             "{} | region x {}..{} y {}..{} ({:.1}% of the screen) | tiles {}x{} px: {} of {} binned | {}x{} samples/pixel",
             plan.stages.join(" -> "),
@@ -206,51 +219,50 @@ pub fn page(scene: &Scene, hw: &HwConfig, r: &Render) -> figures::Result<RenderP
 }
 
 fn pictures(r: &Render, w: u32, h: u32) -> Vec<Picture> {
-    let bits = r.dac_bits;
-    let grey = |title: &str, caption: String, codes: &[u16]| Picture {
-        title: title.into(),
-        caption,
-        uri: images::png_uri(&images::grey(codes, bits), w, h, false),
-        width: w,
-        height: h,
-        legend: Vec::new(),
-    };
+    let (bits, size) = (r.dac_bits, (w, h));
     let levels = format!("{bits}-bit DAC codes as grey levels");
-    let mut v = vec![
-        grey("fixed pipeline", levels.clone(), &r.dac),
-        grey("float reference", levels.clone(), &r.dac_ref),
-    ];
-    let (rgb, max) = images::diff_map(&r.dac, &r.dac_ref);
-    v.push(Picture {
-        title: "difference".into(),
-        caption: format!(
-            "fixed minus reference, DAC codes (largest |diff| {max}): red where the fixed pipeline is brighter"
-        ),
-        uri: images::png_uri(&rgb, w, h, true),
-        width: w,
-        height: h,
-        legend: images::diff_legend(max),
-    });
-    let band = banding_image(&r.dac, &r.contour_map, (1u32 << bits) - 1);
-    v.push(Picture {
-        title: "banding map".into(),
-        caption: "the output dimmed, smooth regions lifted, visible contour steps white".into(),
-        uri: images::png_uri(&band, w, h, false),
-        width: w,
-        height: h,
-        legend: Vec::new(),
-    });
+    let grey = |title: &str, codes: &[u16]| {
+        let px = images::grey(codes, bits);
+        Picture::png(title, levels.clone(), &px, size, false, Vec::new())
+    };
+    let mut v = match &r.colour {
+        Some(c) => colour::pictures(c, size),
+        None => {
+            let band = banding_image(&r.dac, &r.contour_map, (1u32 << bits) - 1);
+            vec![
+                grey("fixed pipeline", &r.dac),
+                grey("float reference", &r.dac_ref),
+                Picture::diff(
+                    "difference",
+                    |max| {
+                        format!(
+                            "fixed minus reference, DAC codes (largest |diff| {max}): red where the fixed pipeline is brighter"
+                        )
+                    },
+                    &r.dac,
+                    &r.dac_ref,
+                    size,
+                ),
+                Picture::png(
+                    "banding map",
+                    "the output dimmed, smooth regions lifted, visible contour steps white".into(),
+                    &band,
+                    size,
+                    false,
+                    Vec::new(),
+                ),
+            ]
+        }
+    };
     if let Some(t) = &r.truth_dac {
-        v.push(grey("depth-of-field truth", levels, t));
-        let (rgb, max) = images::diff_map(&r.dac, t);
-        v.push(Picture {
-            title: "difference to the truth".into(),
-            caption: format!("fixed minus truth, DAC codes (largest |diff| {max})"),
-            uri: images::png_uri(&rgb, w, h, true),
-            width: w,
-            height: h,
-            legend: images::diff_legend(max),
-        });
+        v.push(grey("depth-of-field truth", t));
+        v.push(Picture::diff(
+            "difference to the truth",
+            |max| format!("fixed minus truth, DAC codes (largest |diff| {max})"),
+            &r.dac,
+            t,
+            size,
+        ));
     }
     if let (Some(layers), Some(acc)) = (dof_layers(r), r.taps(StageId::Accumulate)) {
         let keys: Vec<LayerKey> = layers
@@ -268,14 +280,14 @@ fn pictures(r: &Render, w: u32, h: u32) -> Vec<Picture> {
             })
             .collect();
         let (rgb, legend) = images::layer_map(&acc.fixed.frame().frame.depth, &keys);
-        v.push(Picture {
-            title: "depth-of-field layers".into(),
-            caption: "each pixel in the colour of the layer its nearest depth falls in".into(),
-            uri: images::png_uri(&rgb, w, h, true),
-            width: w,
-            height: h,
+        v.push(Picture::png(
+            "depth-of-field layers",
+            "each pixel in the colour of the layer its nearest depth falls in".into(),
+            &rgb,
+            size,
+            true,
             legend,
-        });
+        ));
     }
     v
 }

@@ -118,7 +118,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
                     .iter()
                     .map(|k| output::diff_values(&k.dac, &k.dac_ref))
                     .collect();
-                output::write_rgb8(p, &interleave(&maps), w, h)?;
+                output::write_rgb8(p, &output::interleave(&maps), w, h)?;
             }
             None => output::write_diff(p, &r.dac, &r.dac_ref, w, h)?,
         }
@@ -140,7 +140,7 @@ pub fn run(a: RenderArgs) -> Result<ExitCode, Error> {
                         )
                     })
                     .collect();
-                output::write_rgb8(p, &interleave(&maps), w, h)?;
+                output::write_rgb8(p, &output::interleave(&maps), w, h)?;
             }
             None => {
                 let max = (1u32 << r.dac_bits) - 1;
@@ -297,13 +297,6 @@ fn write_image(path: &str, r: &pipeline::Render, reference: bool) -> Result<(), 
         }
     }
     Ok(())
-}
-
-/// Three planes of one value per pixel interleaved as R, G, B.
-fn interleave(maps: &[Vec<u8>]) -> Vec<u8> {
-    (0..maps[0].len())
-        .flat_map(|p| maps.iter().map(move |m| m[p]))
-        .collect()
 }
 
 /// Refuses, before any write, an output path that cannot be written or is an input, a
