@@ -192,3 +192,43 @@ pub struct StageTiming {
     /// Float reference, ms.
     pub float_ms: f64,
 }
+
+/// The colour error of a colour render's row (`None` for a grey render; see
+/// [`crate::pipeline::colour::ColourReport`]): CIEDE2000 of the fixed against the float image
+/// through the display, and the hue shift on smooth chromatic surfaces. The axes `delta_e`,
+/// `delta_e_p99` and `hue_shift` read it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ColourMetrics {
+    /// Mean CIEDE2000 `Delta E_00` over the pixels.
+    pub delta_e_mean: f64,
+    /// Its 99th percentile.
+    pub delta_e_p99: f64,
+    /// Its largest value.
+    pub delta_e_max: f64,
+    /// Pixels with `Delta E_00` over the 2.3 just-noticeable difference.
+    pub delta_e_over_jnd: u64,
+    /// Mean hue shift on the smooth chromatic pixels, degrees.
+    pub hue_shift_mean_deg: f64,
+    /// Its 99th percentile, degrees.
+    pub hue_shift_p99_deg: f64,
+    /// The smooth chromatic pixels the hue shift is measured on.
+    pub hue_shift_pixels: u64,
+    /// Visible contour steps over the three channels (fixed).
+    pub contour_steps: u64,
+}
+
+impl ColourMetrics {
+    /// The row's colour metrics from a render's colour report.
+    pub fn of(c: &crate::pipeline::colour::ColourReport) -> Self {
+        Self {
+            delta_e_mean: c.delta_e.mean,
+            delta_e_p99: c.delta_e.p99,
+            delta_e_max: c.delta_e.max,
+            delta_e_over_jnd: c.delta_e.over_jnd,
+            hue_shift_mean_deg: c.hue_shift.mean_deg,
+            hue_shift_p99_deg: c.hue_shift.p99_deg,
+            hue_shift_pixels: c.hue_shift.pixels,
+            contour_steps: c.contour_steps[0],
+        }
+    }
+}

@@ -31,8 +31,8 @@ pub mod plot;
 pub mod rows;
 
 pub use metrics::{
-    CostMetrics, CycleMetrics, ErrorMetrics, FlickerMetrics, RowTiming, StageTiming, TruthError,
-    TruthMetrics,
+    ColourMetrics, CostMetrics, CycleMetrics, ErrorMetrics, FlickerMetrics, RowTiming, StageTiming,
+    TruthError, TruthMetrics,
 };
 pub use rows::{hardware_key, read_rows, rewrite_sorted, row_id, row_id_from_keys, scene_key};
 
@@ -60,6 +60,9 @@ pub struct Row {
     pub config: BTreeMap<String, serde_json::Value>,
     /// Error metrics.
     pub error: ErrorMetrics,
+    /// The colour error of a colour render (absent for a grey one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colour: Option<ColourMetrics>,
     /// Cost.
     pub cost: CostMetrics,
     /// Cycles and throughput.
@@ -176,6 +179,7 @@ fn run_job_as(
             contour_steps: rep.contours.contour_steps,
             contour_pixels: rep.contours.contour_pixels,
         },
+        colour: rep.colour.as_ref().map(ColourMetrics::of),
         cost: CostMetrics {
             storage_bits: rep.storage_bits,
             lut_bits: rep.lut_bits,
@@ -360,7 +364,8 @@ pub fn run(
 /// `mine[i]`), relabelled with the job's index, scene name and grid fields; and the number of
 /// rows of `file` not used. A job takes the row with its id and index if there is one, else
 /// the first row with its id (a reordered grid, or two configurations of one grid that
-/// spell the same hardware).
+/// spell the same hardware). A colour render's row without colour metrics (written before
+/// rows had them) is not kept.
 fn keep_rows(
     file: Vec<Row>,
     mine: &[Job],
@@ -380,7 +385,8 @@ fn keep_rows(
         let at = exact
             .get(&(id.as_str(), j.index))
             .or_else(|| first.get(id.as_str()));
-        if let Some(&p) = at {
+        let colour = pipeline::plan::channels(&scenes[j.scene], &configs[j.config].hw) > 1;
+        if let Some(&p) = at.filter(|&&p| file[p].colour.is_some() == colour) {
             used[p] = true;
             kept.push(relabel(file[p].clone(), j, configs, scenes));
         }
