@@ -1049,3 +1049,31 @@ fn a_colour_axis_on_a_grey_sweep_is_refused_naming_the_axis() {
     let (rows, _) = sweep::read_rows(&out_s).unwrap();
     assert!(rows.iter().all(|r| r.colour.is_some()));
 }
+
+#[test]
+fn a_per_channel_sweep_with_stage_reuse_gives_the_rows_of_full_renders() {
+    // 5-5-5 then 5-6-5: channel R's lane is the same, G's vertex intensities are not (they
+    // follow G's frame word), so the geometry stages must not be reused.
+    let d = tmp("colour-reuse");
+    let scene = colour_scene_file(&d);
+    let g = grid_file(
+        &d,
+        "g.toml",
+        "accumulate.frame = [[\"UQ5.0\", \"UQ5.0\", \"UQ5.0\"], [\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"], [\"UQ6.0\", \"UQ6.0\", \"UQ6.0\"]]\n",
+    );
+    let mut outs = Vec::new();
+    for reuse in [true, false] {
+        let out = d
+            .join(format!("{reuse}.jsonl"))
+            .to_string_lossy()
+            .into_owned();
+        let mut args = vec!["sweep", &scene, "--grid", &g, "--out", &out];
+        if !reuse {
+            args.push("--no-reuse");
+        }
+        let o = igemu(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        outs.push(rows(&out));
+    }
+    assert_eq!(outs[0], outs[1]);
+}

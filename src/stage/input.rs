@@ -338,6 +338,8 @@ impl Stage for Input {
             "input": cx.hw.section("input"),
             "guard_band": cx.hw.raster.guard_band,
             "channels": cx.layout.channels,
+            // Each channel's own intensity word (`input.intensity` holds channel R's only).
+            "channel_intensity": cx.hw.channels.as_ref().map(|w| w.intensity),
         })
     }
 
