@@ -353,3 +353,54 @@ fn ranges_lists_every_channel_and_exports_a_typedef_per_channel() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn hdl_vectors_take_the_lane_of_the_channel_asked_for() {
+    let (dir, ramp) = ramp_file("hdl");
+    let vectors = |stage: &str, channel: Option<&str>| -> (String, Vec<u8>) {
+        let out = dir.join(format!("{stage}-{}", channel.unwrap_or("default")));
+        let o = out.to_str().unwrap();
+        let mut args = vec!["hdl", "vectors", "--stage", stage, &ramp, "--out", o];
+        if let Some(c) = channel {
+            args.extend(["--channel", c]);
+        }
+        let (code, stdout, stderr) = common::igemu(&args);
+        assert_eq!(code, 0, "{stderr}");
+        (stdout, std::fs::read(out.join("vectors.hex")).unwrap())
+    };
+    // Equal widths (linear12) in every channel: the gamma LUT's scene taps are the
+    // channel's frame codes, so G's vectors differ from R's; R is the default.
+    let (r_text, r) = vectors("gamma", Some("r"));
+    let (g_text, g) = vectors("gamma", Some("g"));
+    let (_, default) = vectors("gamma", None);
+    assert!(
+        r_text.contains("| channel R |") && g_text.contains("| channel G |"),
+        "{g_text}"
+    );
+    assert_eq!(r, default, "R is the default channel");
+    assert_ne!(r, g, "G's frame codes are not R's");
+    // The MAC's scene taps are the channel's vertex intensities.
+    let (_, ar) = vectors("accumulate", None);
+    let (_, ab) = vectors("accumulate", Some("b"));
+    assert_ne!(ar, ab);
+    // A grey render has no channel to choose.
+    let out = dir.join("grey");
+    let o = out.to_str().unwrap();
+    let (code, _, stderr) = common::igemu(&[
+        "hdl",
+        "vectors",
+        "--stage",
+        "gamma",
+        "--out",
+        o,
+        "--channel",
+        "g",
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("--channel") && stderr.contains("colour"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "nothing written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
