@@ -3,8 +3,8 @@
 //! its grey DAC codes in every channel (so the golden hashes of the grey scenes carry over),
 //! per-channel word widths reach their channel (with their cost and cycles), a flat colour
 //! field is flat in every channel, equal energy holds per channel, a log-coded sample word
-//! stores depth and id once, the binary writes an RGB PNG, and the HTML report shows the
-//! render in colour.
+//! stores depth and id once, the binary writes an RGB PNG, `ranges` and `hdl vectors` take
+//! each channel, and the HTML report shows the render in colour.
 
 mod common;
 
@@ -423,4 +423,156 @@ fn the_html_report_of_a_colour_render_shows_colour_and_a_grey_one_does_not() {
     assert!(page.colour.is_none());
     let fixed = decode_picture(&page.pictures[0].uri);
     assert_eq!(fixed.color(), image::ColorType::L8);
+}
+
+/// A folder for the binary's files and the saturated ramp (R:G:B = 5:2:1) as a scene file in
+/// it: G differs from R everywhere.
+fn ramp_file(name: &str) -> (std::path::PathBuf, String) {
+    let dir = std::env::temp_dir().join(format!("igemu-colour-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let quad = "[[object]]\nkind = \"quad\"\nspace = \"screen\"\n\
+        vertices = [[-4, -4, 0.5], [260, -4, 0.5], [260, 36, 0.5], [-4, 36, 0.5]]\n\
+        intensity = [[0.1, 0.04, 0.02], [0.9, 0.36, 0.18], [0.9, 0.36, 0.18], [0.1, 0.04, 0.02]]\n";
+    let path = dir.join("ramp.toml");
+    std::fs::write(&path, common::scene_toml(256, 32, 0.0, quad)).unwrap();
+    let p = path.to_string_lossy().into_owned();
+    (dir, p)
+}
+
+#[test]
+fn ranges_lists_every_channel_and_exports_a_typedef_per_channel() {
+    let (dir, ramp) = ramp_file("ranges");
+    let hw = dir.join("hw.toml");
+    std::fs::write(
+        &hw,
+        "[accumulate]\nframe = [\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"]\n",
+    )
+    .unwrap();
+    let hw = hw.to_str().unwrap();
+    let (code, stdout, stderr) = common::igemu(&["ranges", &ramp, "--json"]);
+    assert_eq!(code, 0, "{stderr}");
+    let rows: Vec<serde_json::Value> = serde_json::from_str(&stdout).unwrap();
+    let of = |signal: &str| -> Vec<(String, i64)> {
+        rows.iter()
+            .filter(|r| r["signal"] == signal)
+            .map(|r| {
+                (
+                    r["channel"].as_str().unwrap_or("-").to_string(),
+                    r["max"].as_i64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    // Each stage after visibility once per channel; the vertex intensity per channel.
+    let frame = of("accumulate.frame");
+    let names: Vec<&str> = frame.iter().map(|(c, _)| c.as_str()).collect();
+    assert_eq!(names, ["R", "G", "B"], "{stdout}");
+    assert!(
+        frame[0].1 > frame[1].1 && frame[1].1 > frame[2].1,
+        "R:G:B = 5:2:1: {frame:?}"
+    );
+    for (c, signal) in ["R", "G", "B"].iter().zip([
+        "input.intensity.r",
+        "input.intensity.g",
+        "input.intensity.b",
+    ]) {
+        assert_eq!(of(signal).len(), 1, "{signal}");
+        assert_eq!(of(signal)[0].0, *c);
+    }
+    // Shared signals are listed once, without a channel.
+    let z = rows
+        .iter()
+        .filter(|r| r["signal"] == "input.z")
+        .collect::<Vec<_>>();
+    assert_eq!(z.len(), 1);
+    assert!(z[0].get("channel").is_none());
+    // The text table has a channel column.
+    let (code, text, _) = common::igemu(&["ranges", &ramp, "--hw", hw]);
+    assert_eq!(code, 0);
+    assert!(text.lines().next().unwrap().contains("channel"), "{text}");
+    let g_frame = text
+        .lines()
+        .find(|l| l.contains("accumulate.frame") && l.split_whitespace().nth(1) == Some("G"))
+        .expect("channel G's frame");
+    assert!(g_frame.contains("UQ6.0"), "{g_frame}");
+    // The typedefs: one per channel of each per-channel word, with its width.
+    let (code, ap, _) = common::igemu(&["ranges", &ramp, "--hw", hw, "--export", "ap_fixed"]);
+    assert_eq!(code, 0);
+    for line in [
+        "typedef ap_ufixed<5, 5, AP_RND_CONV, AP_SAT> accumulate_frame_r_t;",
+        "typedef ap_ufixed<6, 6, AP_RND_CONV, AP_SAT> accumulate_frame_g_t;",
+        "typedef ap_ufixed<5, 5, AP_RND_CONV, AP_SAT> accumulate_frame_b_t;",
+        "typedef ap_ufixed<10, 6, AP_RND_CONV, AP_SAT> input_intensity_g_t;",
+        "typedef ap_ufixed<8, 8, AP_RND_CONV, AP_SAT> gamma_dac_b_t;",
+        "typedef ap_ufixed<24, 0, AP_TRN, AP_SAT> visibility_z_t;",
+    ] {
+        assert!(ap.contains(line), "{line}: {ap}");
+    }
+    assert!(!ap.contains("accumulate_frame_t"), "{ap}");
+    let (_, v, _) = common::igemu(&["ranges", &ramp, "--export", "verilog"]);
+    assert!(
+        v.contains("localparam integer ACCUMULATE_FRAME_G_W = 12;"),
+        "{v}"
+    );
+    // A grey render: no channel, one typedef each, as before.
+    let (code, grey, _) = common::igemu(&["ranges", "--json"]);
+    assert_eq!(code, 0);
+    assert!(!grey.contains("\"channel\"") && grey.contains("\"input.intensity\""));
+    let (_, grey_ap, _) = common::igemu(&["ranges", "--export", "ap_fixed"]);
+    assert!(
+        grey_ap.contains(" accumulate_frame_t;") && !grey_ap.contains("_r_t"),
+        "{grey_ap}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn hdl_vectors_take_the_lane_of_the_channel_asked_for() {
+    let (dir, ramp) = ramp_file("hdl");
+    let vectors = |stage: &str, channel: Option<&str>| -> (String, Vec<u8>) {
+        let out = dir.join(format!("{stage}-{}", channel.unwrap_or("default")));
+        let o = out.to_str().unwrap();
+        let mut args = vec!["hdl", "vectors", "--stage", stage, &ramp, "--out", o];
+        if let Some(c) = channel {
+            args.extend(["--channel", c]);
+        }
+        let (code, stdout, stderr) = common::igemu(&args);
+        assert_eq!(code, 0, "{stderr}");
+        (stdout, std::fs::read(out.join("vectors.hex")).unwrap())
+    };
+    // Equal widths (linear12) in every channel: the gamma LUT's scene taps are the
+    // channel's frame codes, so G's vectors differ from R's; R is the default.
+    let (r_text, r) = vectors("gamma", Some("r"));
+    let (g_text, g) = vectors("gamma", Some("g"));
+    let (_, default) = vectors("gamma", None);
+    assert!(
+        r_text.contains("| channel R |") && g_text.contains("| channel G |"),
+        "{g_text}"
+    );
+    assert_eq!(r, default, "R is the default channel");
+    assert_ne!(r, g, "G's frame codes are not R's");
+    // The MAC's scene taps are the channel's vertex intensities.
+    let (_, ar) = vectors("accumulate", None);
+    let (_, ab) = vectors("accumulate", Some("b"));
+    assert_ne!(ar, ab);
+    // A grey render has no channel to choose.
+    let out = dir.join("grey");
+    let o = out.to_str().unwrap();
+    let (code, _, stderr) = common::igemu(&[
+        "hdl",
+        "vectors",
+        "--stage",
+        "gamma",
+        "--out",
+        o,
+        "--channel",
+        "g",
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("--channel") && stderr.contains("colour"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "nothing written");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

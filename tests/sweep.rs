@@ -877,3 +877,203 @@ mod files {
         assert!(!d.join("missing").exists());
     }
 }
+
+/// A small colour scene file: two saturated shaded triangles (orange, blue-green) on a
+/// dusk-blue background, 160x120, pinhole camera.
+fn colour_scene_file(dir: &std::path::Path) -> String {
+    let tri = |v: [[f64; 3]; 3], i: [[f64; 3]; 3]| {
+        format!(
+            "[[object]]\nkind = \"triangle\"\nspace = \"screen\"\nvertices = {v:?}\nintensity = {i:?}\n\n"
+        )
+    };
+    let objects = [
+        tri(
+            [[10.0, 10.0, 0.3], [150.0, 20.0, 0.5], [40.0, 110.0, 0.7]],
+            [[0.9, 0.36, 0.18], [0.1, 0.04, 0.02], [0.5, 0.2, 0.1]],
+        ),
+        tri(
+            [[100.0, 60.0, 0.2], [155.0, 115.0, 0.2], [60.0, 115.0, 0.2]],
+            [[0.05, 0.5, 0.4], [0.1, 0.9, 0.7], [0.02, 0.2, 0.15]],
+        ),
+    ]
+    .concat();
+    let text = common::scene_toml(160, 120, 0.0, &objects)
+        .replace("background = 0\n", "background = [0.03, 0.045, 0.08]\n");
+    assert!(text.contains("[0.03, 0.045, 0.08]"), "{text}");
+    let p = dir.join("colour.toml");
+    std::fs::write(&p, text).expect("write scene");
+    p.to_string_lossy().into_owned()
+}
+
+/// 5-6-5, 6-6-6 and 8-8-8 frame words: a grid of per-channel values (an array per value).
+const FRAME_GRID: &str = "accumulate.frame = [[\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"], [\"UQ6.0\", \"UQ6.0\", \"UQ6.0\"], [\"UQ8.0\", \"UQ8.0\", \"UQ8.0\"]]\n";
+
+#[test]
+fn a_colour_sweep_over_frame_widths_ranks_delta_e_against_cost() {
+    let d = tmp("colour");
+    let scene = colour_scene_file(&d);
+    let g = grid_file(&d, "g.toml", FRAME_GRID);
+    let out = d.join("o.jsonl").to_string_lossy().into_owned();
+    let html = d.join("s.html").to_string_lossy().into_owned();
+    let o = igemu(&[
+        "sweep",
+        &scene,
+        "--grid",
+        &g,
+        "--out",
+        &out,
+        "--axes",
+        "delta_e,cost",
+        "--html",
+        &html,
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (rows, _) = sweep::read_rows(&out).unwrap();
+    assert_eq!(rows.len(), 3);
+    // The per-channel values reach the hardware: each row's config is its array.
+    assert_eq!(
+        rows[0].config["accumulate.frame"],
+        serde_json::json!(["UQ5.0", "UQ6.0", "UQ5.0"])
+    );
+    let c: Vec<&sweep::ColourMetrics> = rows
+        .iter()
+        .map(|r| r.colour.as_ref().expect("a colour row has colour metrics"))
+        .collect();
+    let cost = |r: &sweep::Row| pareto::Axis::Cost.key(r);
+    for k in 0..2 {
+        assert!(
+            c[k].delta_e_mean > c[k + 1].delta_e_mean,
+            "mean CIEDE2000 falls with the width: {c:?}"
+        );
+        assert!(
+            c[k].hue_shift_mean_deg > c[k + 1].hue_shift_mean_deg,
+            "{c:?}"
+        );
+        assert!(cost(&rows[k]) < cost(&rows[k + 1]), "wider words cost more");
+    }
+    assert!(
+        c[0].delta_e_over_jnd > 0 && c[0].hue_shift_pixels > 0,
+        "{c:?}"
+    );
+    // Narrower is cheaper and worse, wider dearer and better: all three on the front.
+    let axes = pareto::Axis::parse_list("delta_e,cost").unwrap();
+    assert_eq!(pareto::Axis::DeltaE.key(&rows[1]), c[1].delta_e_mean);
+    assert_eq!(pareto::front(&rows, &axes), [2, 1, 0]);
+    assert!(
+        stdout.contains("mean CIEDE2000") && stdout.contains("(3 of 3 rows)"),
+        "{stdout}"
+    );
+    // A row that loses on both axes leaves the front.
+    let mut worse = rows[1].clone();
+    worse.index = 3;
+    worse.colour.as_mut().unwrap().delta_e_mean = c[0].delta_e_mean + 1.0;
+    let mut four = rows.clone();
+    four.push(worse);
+    assert_eq!(pareto::front(&four, &axes), [2, 1, 0]);
+    // The HTML table carries the colour columns.
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("mean CIEDE2000") && page.contains("mean hue shift deg"));
+    // Rows of a colour render without colour metrics (written before rows had them) are
+    // recomputed by --resume, the others kept.
+    let text = std::fs::read_to_string(&out).unwrap();
+    let lines: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(k, l)| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            if k != 1 {
+                v.as_object_mut().unwrap().remove("colour");
+            }
+            v.to_string() + "\n"
+        })
+        .collect();
+    std::fs::write(&out, lines.concat()).unwrap();
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out, "--resume"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("kept 1, dropped 2 (stale or foreign), computed 2"),
+        "{err}"
+    );
+    let (again, _) = sweep::read_rows(&out).unwrap();
+    let json = |r: &[sweep::Row]| r.iter().map(sweep::without_timing).collect::<Vec<_>>();
+    assert_eq!(json(&again), json(&rows));
+}
+
+#[test]
+fn a_colour_axis_on_a_grey_sweep_is_refused_naming_the_axis() {
+    let d = tmp("colour-grey");
+    let scene = scene_file(&d);
+    let g = grid_file(&d, "g.toml", "gamma.dac_bits = [8, 9]\n");
+    let out = d.join("o.jsonl");
+    let out_s = out.to_string_lossy().into_owned();
+    for axes in ["delta_e,cost", "cost,hue_shift", "delta_e_p99,cost"] {
+        let o = igemu(&[
+            "sweep", &scene, "--grid", &g, "--out", &out_s, "--axes", axes,
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{axes}: {err}");
+        let axis = axes.split(',').find(|a| *a != "cost").unwrap();
+        assert!(
+            err.contains("--axes") && err.contains(&format!("the {axis} axis")),
+            "{err}"
+        );
+        assert!(
+            err.contains("needs a colour scene") && err.contains("small"),
+            "{err}"
+        );
+        assert!(!out.exists(), "no work before the error");
+    }
+    // A grey sweep's rows carry no colour key (their output is as before).
+    let o = igemu(&["sweep", &scene, "--grid", &g, "--out", &out_s]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        !text.contains("\"colour\"") && !text.contains("delta_e"),
+        "{text}"
+    );
+    // Per-channel widths make the grey scene a colour render: the axis is allowed.
+    let g3 = grid_file(&d, "g3.toml", FRAME_GRID);
+    let o = igemu(&[
+        "sweep",
+        &scene,
+        "--grid",
+        &g3,
+        "--out",
+        &out_s,
+        "--axes",
+        "delta_e,cost",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (rows, _) = sweep::read_rows(&out_s).unwrap();
+    assert!(rows.iter().all(|r| r.colour.is_some()));
+}
+
+#[test]
+fn a_per_channel_sweep_with_stage_reuse_gives_the_rows_of_full_renders() {
+    // 5-5-5 then 5-6-5: channel R's lane is the same, G's vertex intensities are not (they
+    // follow G's frame word), so the geometry stages must not be reused.
+    let d = tmp("colour-reuse");
+    let scene = colour_scene_file(&d);
+    let g = grid_file(
+        &d,
+        "g.toml",
+        "accumulate.frame = [[\"UQ5.0\", \"UQ5.0\", \"UQ5.0\"], [\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"], [\"UQ6.0\", \"UQ6.0\", \"UQ6.0\"]]\n",
+    );
+    let mut outs = Vec::new();
+    for reuse in [true, false] {
+        let out = d
+            .join(format!("{reuse}.jsonl"))
+            .to_string_lossy()
+            .into_owned();
+        let mut args = vec!["sweep", &scene, "--grid", &g, "--out", &out];
+        if !reuse {
+            args.push("--no-reuse");
+        }
+        let o = igemu(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        outs.push(rows(&out));
+    }
+    assert_eq!(outs[0], outs[1]);
+}

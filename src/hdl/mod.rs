@@ -26,7 +26,7 @@ pub mod verilator;
 pub use bench::{Bench, Verdict, parse_verdict};
 pub use icarus::{SimRun, available, run_icarus, run_icarus_tb, run_icarus_timed};
 pub(crate) use vectors::bad;
-pub use vectors::vectors;
+pub use vectors::{vectors, vectors_of_channel};
 
 /// Stages with an HDL model: (stage, Verilog module).
 pub const MODULES: &[(StageId, &str)] = &[

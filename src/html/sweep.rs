@@ -95,6 +95,19 @@ pub fn page(rows: &[Row], axes: &[Axis], plot_svg: &str, source: &str) -> SweepP
         ]
         .map(String::from),
     );
+    // A colour render's rows: their CIEDE2000 and hue shift (no columns on a grey sweep).
+    let colour = rows.iter().any(|r| r.colour.is_some());
+    if colour {
+        columns.extend(
+            [
+                "mean CIEDE2000",
+                "p99 CIEDE2000",
+                "px over 2.3",
+                "mean hue shift deg",
+            ]
+            .map(String::from),
+        );
+    }
     let extra: Vec<Axis> = axes
         .iter()
         .copied()
@@ -144,6 +157,17 @@ pub fn page(rows: &[Row], axes: &[Axis], plot_svg: &str, source: &str) -> SweepP
                 text(r.cycles.bottleneck.clone()),
                 num(r.timing.fixed_ms, 1),
             ]);
+            if colour {
+                cells.extend(match &r.colour {
+                    Some(c) => [
+                        num(c.delta_e_mean, 4),
+                        num(c.delta_e_p99, 4),
+                        num(c.delta_e_over_jnd as f64, 0),
+                        num(c.hue_shift_mean_deg, 3),
+                    ],
+                    None => [f64::INFINITY; 4].map(|v| num(v, 0)),
+                });
+            }
             cells.extend(extra.iter().map(|a| num(a.value(r), 6)));
             TableRow { front: f, cells }
         })

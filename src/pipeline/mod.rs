@@ -80,6 +80,27 @@ impl Render {
     pub fn frame(&self) -> &Frame {
         &self.last().fixed.frame().frame
     }
+    /// Channel `c`'s frame memory the gamma stage read: [`Render::frame`] for channel 0 and
+    /// for a grey render, else the last tap of channel `c`'s lane.
+    pub fn channel_frame(&self, c: usize) -> &Frame {
+        match self
+            .colour
+            .as_ref()
+            .and_then(|k| k.lanes.get(c.wrapping_sub(1)))
+        {
+            Some(lane) => {
+                &lane
+                    .last()
+                    .expect("a lane runs stages")
+                    .outcome
+                    .taps
+                    .fixed
+                    .frame()
+                    .frame
+            }
+            None => self.frame(),
+        }
+    }
     /// The cycle model's workload of this run under other timings (same tokens).
     pub fn workload_for(&self, c: &crate::config::CyclesCfg) -> Workload {
         report::workload(&self.plan, &self.steps, c)
@@ -220,6 +241,19 @@ pub fn run_through(
     opts: RunOptions,
     last: StageId,
 ) -> Result<(Plan, Taps)> {
+    run_through_channel(scene, hw, opts, last, 0)
+}
+
+/// [`run_through`] taking the taps of channel `c`'s lane when `last` runs after visibility
+/// in a colour render (a geometry stage's taps carry every channel; a grey render has
+/// channel 0 only).
+pub fn run_through_channel(
+    scene: &Scene,
+    hw: &HwConfig,
+    opts: RunOptions,
+    last: StageId,
+    c: usize,
+) -> Result<(Plan, Taps)> {
     let plan = plan::build(scene, hw)?;
     if !plan.layout.has(last) {
         return Err(crate::error::Error::File(crate::error::FileError {
@@ -238,7 +272,16 @@ pub fn run_through(
         }));
     }
     check_memory(scene, &plan, opts)?;
-    let steps = run::run(scene, hw, &plan, opts, None, Some(last))?;
-    let taps = steps.last().expect("the plan runs it").outcome.taps.clone();
+    let (steps, lanes) = if c == 0 {
+        // Channel 0's steps only: the other lanes are not run.
+        (
+            run::run(scene, hw, &plan, opts, None, Some(last))?,
+            Vec::new(),
+        )
+    } else {
+        run::run_lanes(scene, hw, &plan, opts, None, Some(last))?
+    };
+    let lane = lanes.get(c.wrapping_sub(1)).unwrap_or(&steps);
+    let taps = lane.last().expect("the plan runs it").outcome.taps.clone();
     Ok((plan, taps))
 }

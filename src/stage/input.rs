@@ -59,7 +59,8 @@ struct Quantizers<'a> {
     x: SignalStats,
     y: SignalStats,
     z: SignalStats,
-    i: SignalStats,
+    /// One per channel.
+    i: Vec<SignalStats>,
     local: LocalError,
 }
 
@@ -96,7 +97,7 @@ impl Quantizers<'_> {
         let mut i = [0; 3];
         for (k, code) in i.iter_mut().enumerate().take(self.channels) {
             let q = intensity_quantizer(self.hw, k);
-            *code = Self::one(&q, &mut self.i, &mut self.local, v.i[k] * white_lsb(&q))?;
+            *code = Self::one(&q, &mut self.i[k], &mut self.local, v.i[k] * white_lsb(&q))?;
         }
         Ok(QVertex { x, y, z, i })
     }
@@ -124,7 +125,8 @@ pub fn overflow_error(signal: &str, q: &Quantizer, exact_lsb: f64) -> Error {
 pub struct Quantized {
     /// Primitives in scene order.
     pub prims: Vec<QPrim>,
-    /// `input.x`, `input.y`, `input.z`, `input.intensity`.
+    /// `input.x`, `input.y`, `input.z`, and `input.intensity` ([`intensity_signal`]: one per
+    /// channel of a colour render).
     pub signals: Vec<SignalStats>,
     /// Codes against exact values.
     pub local: LocalError,
@@ -141,7 +143,14 @@ pub fn quantize(host: &HostScene, hw: &HwConfig, channels: usize) -> Result<Quan
         x: SignalStats::new("input.x", hw.input.coord.format),
         y: SignalStats::new("input.y", hw.input.coord.format),
         z: SignalStats::new("input.z", hw.input.z.format),
-        i: SignalStats::new("input.intensity", hw.input.intensity.format),
+        i: (0..channels)
+            .map(|c| {
+                SignalStats::new(
+                    &intensity_signal(channels, c),
+                    intensity_quantizer(hw, c).format,
+                )
+            })
+            .collect(),
         local: LocalError::default(),
     };
     let mut out = Vec::with_capacity(host.prims.len());
@@ -166,7 +175,7 @@ pub fn quantize(host: &HostScene, hw: &HwConfig, channels: usize) -> Result<Quan
     Ok(Quantized {
         prims: out,
         local: std::mem::take(&mut qs.local).finish(),
-        signals: vec![qs.x, qs.y, qs.z, qs.i],
+        signals: [qs.x, qs.y, qs.z].into_iter().chain(qs.i).collect(),
         vertices,
     })
 }
@@ -177,6 +186,15 @@ pub fn vertices_of(p: &Primitive) -> u32 {
         Primitive::Triangle(_) => 3,
         Primitive::Line { .. } => 2,
         Primitive::Point { .. } => 1,
+    }
+}
+
+/// The name of channel `c`'s vertex-intensity signal among `channels`: `input.intensity`
+/// for a grey render, `input.intensity.r`, `.g` and `.b` for a colour one.
+pub fn intensity_signal(channels: usize, c: usize) -> String {
+    match channels {
+        1 => "input.intensity".to_string(),
+        _ => format!("input.intensity.{}", ["r", "g", "b"][c]),
     }
 }
 
@@ -338,6 +356,8 @@ impl Stage for Input {
             "input": cx.hw.section("input"),
             "guard_band": cx.hw.raster.guard_band,
             "channels": cx.layout.channels,
+            // Each channel's own intensity word (`input.intensity` holds channel R's only).
+            "channel_intensity": cx.hw.channels.as_ref().map(|w| w.intensity),
         })
     }
 

@@ -33,6 +33,12 @@ pub enum Axis {
     /// The emulator's fixed-model milliseconds for the row's configuration (minimised):
     /// speed against error.
     EmulatorTime,
+    /// Mean CIEDE2000 of the fixed against the float image (minimised; a colour render).
+    DeltaE,
+    /// The 99th percentile of CIEDE2000 (minimised; a colour render).
+    DeltaEP99,
+    /// Mean hue shift on smooth chromatic surfaces, degrees (minimised; a colour render).
+    HueShift,
 }
 
 /// Axis names accepted by `--axes`.
@@ -49,6 +55,9 @@ pub const AXES: &[&str] = &[
     "truth_algorithm",
     "truth_quantisation",
     "emulator_time",
+    "delta_e",
+    "delta_e_p99",
+    "hue_shift",
 ];
 
 impl Axis {
@@ -67,6 +76,9 @@ impl Axis {
             "truth_algorithm" => Axis::TruthAlgorithm,
             "truth_quantisation" => Axis::TruthQuantisation,
             "emulator_time" => Axis::EmulatorTime,
+            "delta_e" => Axis::DeltaE,
+            "delta_e_p99" => Axis::DeltaEP99,
+            "hue_shift" => Axis::HueShift,
             other => {
                 return Err(format!(
                     "unknown axis `{other}`; allowed: {}",
@@ -107,6 +119,9 @@ impl Axis {
             Axis::TruthAlgorithm => "float Weber vs truth",
             Axis::TruthQuantisation => "Weber fixed vs float",
             Axis::EmulatorTime => "emulator fixed ms",
+            Axis::DeltaE => "mean CIEDE2000",
+            Axis::DeltaEP99 => "p99 CIEDE2000",
+            Axis::HueShift => "mean hue shift deg",
         }
     }
 
@@ -128,7 +143,23 @@ impl Axis {
             Axis::TruthAlgorithm => truth(r, |t| t.algorithm.whole.weber_mean),
             Axis::TruthQuantisation => truth(r, |t| t.quantisation.whole.weber_mean),
             Axis::EmulatorTime => r.timing.fixed_ms,
+            Axis::DeltaE => colour(r, |c| c.delta_e_mean),
+            Axis::DeltaEP99 => colour(r, |c| c.delta_e_p99),
+            Axis::HueShift => colour(r, |c| c.hue_shift_mean_deg),
         }
+    }
+
+    /// Whether the axis reads the colour error of a colour render.
+    pub fn needs_colour(self) -> bool {
+        matches!(self, Axis::DeltaE | Axis::DeltaEP99 | Axis::HueShift)
+    }
+
+    /// The name `--axes` takes for this axis.
+    pub fn arg(self) -> &'static str {
+        AXES.iter()
+            .copied()
+            .find(|a| Axis::parse(a) == Ok(self))
+            .unwrap_or("?")
     }
 
     /// Whether the axis reads the depth-of-field truth (`--dof-truth`).
@@ -152,6 +183,11 @@ impl Axis {
 /// is worst.
 fn truth(r: &Row, f: impl Fn(&super::TruthMetrics) -> f64) -> f64 {
     r.truth.as_ref().map_or(f64::INFINITY, f)
+}
+
+/// A colour metric of a row; a row without colour (a grey render) is worst.
+fn colour(r: &Row, f: impl Fn(&super::ColourMetrics) -> f64) -> f64 {
+    r.colour.as_ref().map_or(f64::INFINITY, f)
 }
 
 /// Whether `a` dominates `b`: no worse on every axis and better on one.
@@ -187,4 +223,48 @@ pub fn front(rows: &[Row], axes: &[Axis]) -> Vec<usize> {
             .then(rows[a].index.cmp(&rows[b].index))
     });
     out
+}
+
+/// Refuses a colour axis (`delta_e`, `delta_e_p99`, `hue_shift`) on a sweep with a job that
+/// renders grey (one channel: a grey scene on hardware without per-channel widths), naming
+/// the axis, the scene and the configuration.
+pub fn check_colour_axes(
+    axes: &[Axis],
+    configs: &[super::grid::Config],
+    scenes: &[crate::scene::Scene],
+) -> Result<(), String> {
+    let Some(axis) = axes.iter().find(|a| a.needs_colour()) else {
+        return Ok(());
+    };
+    for c in configs {
+        for s in scenes {
+            if crate::pipeline::plan::channels(s, &c.hw) == 1 {
+                return Err(format!(
+                    "the {} axis needs a colour scene: scene `{}` renders one grey channel under configuration {} ({}); sweep a colour scene (e.g. default-colour, or `colour = true` in its [image]) or per-channel widths (e.g. `accumulate.frame = [[\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"]]`)",
+                    axis.arg(),
+                    s.name,
+                    c.index,
+                    c.canonical
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a colour axis on rows of which one has no colour metrics (a grey render's row,
+/// `igemu sweep merge`).
+pub fn check_colour_rows(axes: &[Axis], rows: &[Row]) -> Result<(), String> {
+    let Some(axis) = axes.iter().find(|a| a.needs_colour()) else {
+        return Ok(());
+    };
+    match rows.iter().find(|r| r.colour.is_none()) {
+        None => Ok(()),
+        Some(r) => Err(format!(
+            "the {} axis needs a colour scene: row {} (scene `{}`) is a grey render's and has no colour metrics",
+            axis.arg(),
+            r.index,
+            r.scene
+        )),
+    }
 }

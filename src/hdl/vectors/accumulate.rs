@@ -3,21 +3,19 @@
 //! checked against [`AccParams::mac_code`]. Vectors: scene taps (kernel weights, vertex
 //! intensities, rendered frame codes), edge cases at the frame boundaries and random ones.
 
-use super::{RANDOM, TAPS, frame_taps};
+use super::{RANDOM, SceneTaps, TAPS};
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::fixed::{Overflow, Quant};
 use crate::hdl::bench::{Bench, Rng};
-use crate::pipeline;
-use crate::scene::Scene;
+use crate::stage::StageId;
 use crate::stage::accumulate::AccParams;
 use crate::stage::input::QPrim;
-use crate::stage::{RunOptions, StageId};
 use std::hint::black_box;
 use std::time::Instant;
 
 /// Fills `b` with the accumulation MAC's parameters and vectors.
-pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
+pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng) -> Result<()> {
     if hw.coding.kind == crate::config::CodingKind::LogAdd {
         return Err(super::bad(
             hw,
@@ -27,7 +25,8 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     }
     let frame = hw.accumulate.frame;
     let acc_bits = frame.format.total_bits();
-    let (_, input) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Input)?;
+    let (_, input) = src.through(StageId::Input)?;
+    let ch = src.channel;
     let kernel = crate::stage::accumulate::kernel(hw);
     let bg = input.fixed.prims().bg;
     let i_fmt = hw.input.intensity.format;
@@ -65,7 +64,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     };
     // Scene taps: the kernel's weights, the scene's vertex intensity codes and
     // the rendered frame codes as the running sum.
-    let taps = frame_taps(scene, hw, TAPS)?;
+    let taps = src.frame(TAPS)?;
     let ws: Vec<u32> = kernel.w.clone();
     let is: Vec<u32> = input
         .fixed
@@ -73,12 +72,12 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
         .q
         .iter()
         .flat_map(|p| match p {
-            QPrim::Triangle(v) => vec![v[0].i[0], v[1].i[0], v[2].i[0]],
-            QPrim::Line { a, b, .. } => vec![a.i[0], b.i[0]],
-            QPrim::Point { v, .. } => vec![v.i[0]],
+            QPrim::Triangle(v) => vec![v[0].i[ch], v[1].i[ch], v[2].i[ch]],
+            QPrim::Line { a, b, .. } => vec![a.i[ch], b.i[ch]],
+            QPrim::Point { v, .. } => vec![v.i[ch]],
         })
         .map(|i| i.max(0) as u32)
-        .chain(std::iter::once(bg[0]))
+        .chain(std::iter::once(bg[ch]))
         .collect();
     for (k, t) in taps.iter().enumerate() {
         let w = ws[k % ws.len()];

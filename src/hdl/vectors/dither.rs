@@ -4,18 +4,18 @@
 //! Bayer 4x4 without an ordered dither configured. Vectors: scene taps, every input code at
 //! every mask phase, random ones.
 
-use super::{RANDOM, TAPS, frame_taps, gamma_spec};
+use super::{RANDOM, SceneTaps, TAPS, gamma_spec};
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::hdl::bench::{Bench, Rng};
-use crate::scene::Scene;
 use crate::stage::dither::{Mask, ordered_code};
 use crate::stage::gamma::extended_lut;
 use std::hint::black_box;
 use std::time::Instant;
 
 /// Fills `b` with the ordered dither's parameters, mask ROM and vectors.
-pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
+pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng) -> Result<()> {
+    let scene = src.scene;
     let fmt = hw.accumulate.frame.format;
     let (frac, int_bits) = (fmt.frac_bits, fmt.int_bits);
     // The configured mask; without an ordered dither configured, Bayer 4x4.
@@ -53,7 +53,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
     };
     let lut = extended_lut(&gamma_spec(scene, hw), int_bits, s);
     let amax = lut.len() - 1;
-    let taps = frame_taps(scene, hw, TAPS)?;
+    let taps = src.frame(TAPS)?;
     let off = mask.offset(cfg.frame);
     for t in &taps {
         let x = lut[((t.2 >> frac) as usize).min(amax)];

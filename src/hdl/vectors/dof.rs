@@ -9,16 +9,15 @@
 //! sample `t` sits at line position `pos + t - HALF`; samples off the line hold random
 //! values the module must ignore.
 
-use super::{RANDOM, TAPS, bad};
+use super::{RANDOM, SceneTaps, TAPS, bad};
 use crate::config::{DofKernel, DofKind, HwConfig};
 use crate::error::{Error, Result};
 use crate::hdl::bench::{Bench, Rng};
-use crate::pipeline;
-use crate::scene::{Lens, Scene};
+use crate::scene::Lens;
+use crate::stage::StageId;
 use crate::stage::dof::{
     DepthImage, LayerPlanes, LensMap, border_sum, layered_fixed_observed, plan_layers, row_mac,
 };
-use crate::stage::{RunOptions, StageId};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -28,7 +27,8 @@ fn bits(v: u128) -> u32 {
 }
 
 /// Fills `b` with the dof row MAC's parameters, coefficient ROM and vectors.
-pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
+pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng) -> Result<()> {
+    let scene = src.scene;
     let p = &hw.dof;
     if !matches!(scene.camera.lens, Lens::ThinLens { .. }) {
         return Err(Error::File(scene.error(
@@ -63,7 +63,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
             ),
         ));
     }
-    let (_, taps) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Accumulate)?;
+    let (_, taps) = src.through(StageId::Accumulate)?;
     let frame = &taps.fixed.frame().frame;
     let (w, h) = (frame.width as usize, frame.height as usize);
     let lens = LensMap::of(scene, hw, frame.height).expect("a thin-lens camera, checked above");

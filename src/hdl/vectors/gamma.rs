@@ -2,17 +2,17 @@
 //! out, checked against [`GammaLut::apply`]. Vectors: scene taps, every LUT address (with a
 //! random fraction) and random frame codes.
 
-use super::{RANDOM, TAPS, bad, frame_taps, gamma_spec};
+use super::{RANDOM, SceneTaps, TAPS, bad, gamma_spec};
 use crate::config::{CodingKind, HwConfig};
 use crate::error::Result;
 use crate::hdl::bench::{Bench, Rng};
-use crate::scene::Scene;
 use crate::stage::gamma::GammaLut;
 use std::hint::black_box;
 use std::time::Instant;
 
 /// Fills `b` with the gamma LUT's parameters, ROM and vectors.
-pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
+pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng) -> Result<()> {
+    let scene = src.scene;
     if hw.coding.kind == CodingKind::LogAdd {
         return Err(bad(
             hw,
@@ -38,7 +38,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
         lut.apply(&[a], frac, &mut o);
         vec![a as u64, o[0] as u64]
     };
-    let taps = frame_taps(scene, hw, TAPS)?;
+    let taps = src.frame(TAPS)?;
     b.vectors.extend(taps.iter().map(|t| one(t.2)));
     b.sources.push(("scene", taps.len()));
     for a in 0..1u64 << int_bits {

@@ -4,17 +4,17 @@
 //! orders), scene taps and random pairs; the bench also carries the row signatures of the
 //! full pair space for the exhaustive testbench ([`crate::hdl::exhaustive`]).
 
-use super::{RANDOM, TAPS, frame_taps};
+use super::{RANDOM, SceneTaps, TAPS};
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::hdl::bench::{Bench, Rng};
 use crate::hdl::exhaustive;
-use crate::scene::Scene;
 use std::hint::black_box;
 use std::time::Instant;
 
 /// Fills `b` with the log adder's parameters, ROMs and vectors.
-pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) -> Result<()> {
+pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng) -> Result<()> {
+    let scene = src.scene;
     let add = exhaustive::log_adder_of(scene, hw)?;
     let fb = add.frame_bits();
     let td = add.table_data_bits().max(1);
@@ -58,7 +58,7 @@ pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig, rng: &mut Rng) 
         n += 2;
     }
     b.sources.push(("every difference", n));
-    let taps = frame_taps(scene, hw, TAPS)?;
+    let taps = src.frame(TAPS)?;
     for w in taps.windows(2) {
         b.vectors.push(one(w[0].2 as i64, w[1].2 as i64));
     }

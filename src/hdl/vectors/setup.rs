@@ -3,23 +3,21 @@
 //! Vectors: every triangle edge of the quantised scene over all its sample rows, until
 //! `EDGE_ROWS` rows are reached; the word widths are the narrowest that hold them.
 
-use super::EDGE_ROWS;
-use crate::config::HwConfig;
+use super::{EDGE_ROWS, SceneTaps};
 use crate::error::Result;
 use crate::hdl::bench::Bench;
-use crate::pipeline;
-use crate::scene::Scene;
+use crate::stage::StageId;
 use crate::stage::input::QPrim;
 use crate::stage::setup::Edge;
-use crate::stage::{RunOptions, StageId};
 use std::hint::black_box;
 use std::time::Instant;
 
 /// Fills `b` with the edge stepper's parameters and vectors.
-pub(super) fn bench(b: &mut Bench, scene: &Scene, hw: &HwConfig) -> Result<()> {
+/// The edges are geometry, which the channels share: every channel's bench is the same.
+pub(super) fn bench(b: &mut Bench, src: &SceneTaps) -> Result<()> {
     // Real scene edges: every triangle edge of the quantised scene, loaded and
     // walked over all its sample rows.
-    let (plan, taps) = pipeline::run_through(scene, hw, RunOptions::FAST, StageId::Input)?;
+    let (plan, taps) = src.through(StageId::Input)?;
     let g = &plan.layout.grid;
     let mut edges = vec![];
     for p in &taps.fixed.prims().q {

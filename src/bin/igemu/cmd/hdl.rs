@@ -1,11 +1,12 @@
 //! `igemu hdl vectors`: write a stage's HDL vectors, ROM files and `params.vh`, and with
 //! `--run` run its self-checking testbench under Icarus Verilog or Verilator (with
-//! `--exhaustive`, the log adder's full pair space).
+//! `--exhaustive`, the log adder's full pair space). On a colour render `--channel` picks
+//! the channel whose lane the vectors come from (R by default).
 
 use crate::args::{SceneArgs, SimArg, StageArg, arg_error};
 use crate::guard::Inputs;
 use crate::out::outln;
-use clap::{Args, Subcommand};
+use clap::{Args, Subcommand, ValueEnum};
 use igemu::config::HwConfig;
 use igemu::error::Error;
 use igemu::hdl::verilator::Sim;
@@ -41,6 +42,20 @@ pub struct HdlVectorsArgs {
     /// signature per row); a failing row is then run pair by pair to name the pair.
     #[arg(long, requires = "run")]
     pub exhaustive: bool,
+    /// A colour render's channel: the vectors of its lane, with its word widths (default r; refused on a grey render).
+    #[arg(long, value_enum)]
+    pub channel: Option<ChannelArg>,
+}
+
+/// `--channel`: a colour render's channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ChannelArg {
+    /// Red (channel 0).
+    R,
+    /// Green (channel 1).
+    G,
+    /// Blue (channel 2).
+    B,
 }
 
 /// Runs an `hdl` subcommand.
@@ -60,16 +75,35 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
             "only the log adder (--stage logdomain) has an exhaustive testbench".into(),
         ));
     }
+    let channels = igemu::pipeline::plan::channels(&scene, &hw);
+    if let Some(c) = a.channel.filter(|_| channels == 1) {
+        return Err(arg_error(
+            "--channel",
+            format!(
+                "`--channel {}` needs a colour render: scene `{}` renders one grey channel on hardware `{}`; give a colour scene (e.g. default-colour) or per-channel widths, or leave out --channel",
+                c.to_possible_value()
+                    .map_or("?".into(), |v| v.get_name().to_string()),
+                scene.name,
+                hw.name
+            ),
+        ));
+    }
+    let channel = a.channel.map_or(0, |c| c as usize);
     let inputs = Inputs::of(&a.s);
     crate::guard::folder("--out", &a.out)?;
     let dir = Path::new(&a.out);
     inputs.check_in("--out", dir, ["params.vh", "vectors.hex"])?;
-    let b = hdl::vectors(a.stage.0, &scene, &hw)?;
+    let b = hdl::vectors_of_channel(a.stage.0, &scene, &hw, channel)?;
     inputs.check_in("--out", dir, b.files())?;
     b.write(dir)?;
     let src: Vec<String> = b.sources.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    let lane = if channels > 1 {
+        format!(" | channel {}", igemu::pipeline::colour::NAMES[channel])
+    } else {
+        String::new()
+    };
     outln!(
-        "hdl vectors | stage {} (module {}) | hardware `{}` | {} vectors ({}) | {}",
+        "hdl vectors | stage {} (module {}) | hardware `{}`{lane} | {} vectors ({}) | {}",
         b.stage,
         b.module,
         hw.name,

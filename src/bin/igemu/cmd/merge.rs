@@ -82,7 +82,7 @@ pub struct MergeArgs {
     /// Output JSON-lines file: every row of the sweep, in job order (written only when the merge is complete).
     #[arg(long)]
     pub out: String,
-    /// Axes of the Pareto front, as for `igemu sweep` (flicker needs rows with flicker metrics, truth_* need --dof-truth).
+    /// Axes of the Pareto front, as for `igemu sweep` (flicker needs rows with flicker metrics, truth_* need --dof-truth, delta_e, delta_e_p99 and hue_shift rows of a colour render).
     #[arg(long, default_value = "error,cost")]
     pub axes: String,
     /// Plot error vs cost and error vs throughput with the Pareto fronts (SVG or PNG, by extension).
@@ -168,6 +168,7 @@ fn run_merge(a: MergeArgs) -> Result<ExitCode, Error> {
             ),
         ));
     }
+    pareto::check_colour_rows(&axes, &m.rows).map_err(|m| arg_error("--axes", m))?;
     sweep::rewrite_sorted(&a.out, &m.rows)?;
     let _ = writeln!(
         err,

@@ -1,5 +1,6 @@
 //! `igemu ranges`: the observed min/max per signal and the narrowest format holding it, or
 //! with `--export` the configuration's formats as ac_fixed, ap_fixed, SystemC or Verilog.
+//! A colour render lists each channel (a `channel` column) and exports a typedef per channel.
 
 use crate::args::{ExportArg, SceneArgs};
 use crate::out::{out, outln};
@@ -25,11 +26,12 @@ pub struct RangesArgs {
 pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
     if let Some(e) = a.export {
         let hw = a.s.hw()?;
-        out!("{}", ranges::export(&hw, e.into()));
+        let channels = igemu::pipeline::plan::channels(&a.s.scene()?, &hw);
+        out!("{}", ranges::export(&hw, e.into(), channels));
         return Ok(ExitCode::SUCCESS);
     }
     let r = a.s.render(RunOptions::FAST)?;
-    let rows = ranges::ranges(&r.report.stages);
+    let rows = ranges::ranges_of(&r.report);
     if a.json {
         outln!(
             "{}",
@@ -37,9 +39,23 @@ pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
         );
         return Ok(ExitCode::SUCCESS);
     }
+    // A colour render has a channel column (`-`: a signal the channels share).
+    let colour = r.report.colour.is_some();
+    let channel = |c: Option<&str>| {
+        if colour {
+            format!("{:<8}", c.unwrap_or("-"))
+        } else {
+            String::new()
+        }
+    };
     outln!(
-        "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+        "{:<12} {}{:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
         "stage",
+        if colour {
+            format!("{:<8}", "channel")
+        } else {
+            String::new()
+        },
         "signal",
         "format",
         "min (LSB)",
@@ -50,8 +66,9 @@ pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
     for s in rows {
         let opt = |v: Option<i128>| v.map_or("-".to_string(), |v| v.to_string());
         outln!(
-            "{:<12} {:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
+            "{:<12} {}{:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
             s.stage,
+            channel(s.channel),
             s.signal,
             s.format,
             opt(s.min),

@@ -29,7 +29,7 @@ pub struct SweepArgs {
     /// Configurations rendered in parallel, 1..=1024 (1 = serial; results are identical).
     #[arg(long, default_value_t = 1, value_parser = crate::args::int_in(1, 1024), allow_negative_numbers = true)]
     pub jobs: u32,
-    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker), truth_total, truth_algorithm, truth_quantisation (mean Weber against the depth-of-field truth; need --dof-truth), emulator_time (the fixed models' ms).
+    /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker), truth_total, truth_algorithm, truth_quantisation (mean Weber against the depth-of-field truth; need --dof-truth), emulator_time (the fixed models' ms), delta_e, delta_e_p99 (CIEDE2000 mean, 99th percentile), hue_shift (mean, degrees) (a colour scene).
     #[arg(long, default_value = "error,cost")]
     pub axes: String,
     /// Run every phase for every configuration (no stage reuse between configurations).
@@ -82,6 +82,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     }
     check_truth_axes(&axes, a.truth.dof_truth)?;
     let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
+    pareto::check_colour_axes(&axes, &configs, &scenes).map_err(|m| arg_error("--axes", m))?;
     for c in &configs {
         for s in &scenes {
             // Located at the grid's key or the scene's line (the configuration's source).
