@@ -1,6 +1,7 @@
 //! The fixed-only fast path (`pipeline::fast`, `render --no-reference`): the same DAC codes,
 //! work, signals, overflows, cost and cycles as a full render, on grey and colour scenes,
-//! every dof kind, log coding, dither and banded runs; no float tap is computed; the command
+//! every dof kind, log coding, dither and banded runs; no float tap and no memory image is
+//! computed unless asked for (the pack checks are then the full render's); the command
 //! line writes the same image and refuses what needs the reference, naming the flag.
 
 mod common;
@@ -70,6 +71,21 @@ fn check(s: &Scene, h: &HwConfig, what: &str) {
     let r = render(s, h, RunOptions::FAST).unwrap_or_else(|e| panic!("{what}: {e}"));
     let e = emulate(s, h, RunOptions::FIXED_ONLY, None).unwrap_or_else(|e| panic!("{what}: {e}"));
     same_as_full(&e, &r, what);
+    assert!(
+        e.report.cycles.cost.packed.is_empty(),
+        "{what}: no memory images by default"
+    );
+    // With the memories' images (what --rom-out needs): the full render's pack checks.
+    let packed = RunOptions {
+        pack_check: true,
+        ..RunOptions::FIXED_ONLY
+    };
+    let e = emulate(s, h, packed, None).unwrap();
+    assert_eq!(
+        e.report.cycles.cost.packed, r.report.cycles.cost.packed,
+        "{what}"
+    );
+    assert!(!e.report.cycles.cost.packed.is_empty());
 }
 
 #[test]
@@ -145,6 +161,20 @@ fn the_command_line_writes_the_same_image_and_refuses_reference_outputs() {
     let v: serde_json::Value = serde_json::from_str(&out).expect("JSON");
     assert_eq!(v["mode"], "fixed only");
     assert!(v.get("end_to_end").is_none());
+    // --rom-out builds the memories' images on the fast path too.
+    let roms = p("roms");
+    std::fs::create_dir_all(&roms).unwrap();
+    let (c, _, err) = igemu(&[
+        "render",
+        "default",
+        "--no-reference",
+        "--rom-out",
+        &roms,
+        "-o",
+        &p("r.png"),
+    ]);
+    assert_eq!(c, 0, "{err}");
+    assert!(std::path::Path::new(&roms).join("manifest.json").exists());
     for flag in ["--reference-out", "--diff-out", "--banding-out", "--html"] {
         let (c, _, err) = igemu(&[
             "render",

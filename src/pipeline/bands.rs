@@ -496,7 +496,11 @@ pub fn run(
             let st = stage::get(id);
             let fixed = last_acc.take().expect("a band ran");
             let cost = st.cost(&cx, &fixed);
-            let images = st.memories(&cx, &fixed, &taps);
+            let images = if opts.pack_check {
+                st.memories(&cx, &fixed, &taps)
+            } else {
+                Vec::new()
+            };
             packs = Some(pack::check(&cost, &images));
         }
         out.push(m.finish(taps.clone(), packs));

@@ -80,8 +80,9 @@ pub struct Emulation {
 }
 
 /// Runs the fixed model of `scene` on `hw` (no float reference, no comparison): the DAC
-/// codes, the cycle model and the cost. `opts` gives the memory limit and the band height;
-/// the reference options are off.
+/// codes, the cycle model and the cost. `opts` gives the memory limit, the band height and
+/// whether the memories' images are built and pack-checked (`--rom-out` needs them); the
+/// reference options are off.
 pub fn emulate(
     scene: &Scene,
     hw: &HwConfig,
@@ -101,6 +102,7 @@ fn emulate_on_pool(
     let opts = RunOptions {
         max_memory: opts.max_memory,
         band_rows: opts.band_rows,
+        pack_check: opts.pack_check,
         ..RunOptions::FIXED_ONLY
     };
     let plan = plan::build(scene, hw)?;

@@ -341,7 +341,11 @@ pub(super) fn execute_keep(
     taps.channels = None;
     let tokens = stage.tokens(cx, &fixed);
     let cost = stage.cost(cx, &fixed);
-    let images = stage.memories(cx, &fixed, &taps);
+    let images = if cx.opts.pack_check {
+        stage.memories(cx, &fixed, &taps)
+    } else {
+        Vec::new()
+    };
     let packs = pack::check(&cost, &images);
     let report = StageReport {
         name: stage.id().name().to_string(),

@@ -34,6 +34,9 @@ pub struct RunOptions {
     /// Run the float reference beside the fixed model (`false`: the fixed-only fast path,
     /// `render --no-reference`; no float taps, no comparisons, see `pipeline::fast`).
     pub reference: bool,
+    /// Build every memory's image and pack it into the bits its cost charges
+    /// ([`crate::cost::pack`]; also what `--rom-out` writes). Off on the fixed-only path.
+    pub pack_check: bool,
     /// Run the stage-local comparisons (float stage on the fixed stage's input).
     pub stage_local: bool,
     /// Also run the (slow) per-pixel depth-of-field reference and the layer theorem check.
@@ -59,6 +62,7 @@ impl Default for RunOptions {
     fn default() -> Self {
         Self {
             reference: true,
+            pack_check: true,
             stage_local: true,
             dof_reference: false,
             max_memory: None,
@@ -70,9 +74,10 @@ impl Default for RunOptions {
 
 impl RunOptions {
     /// The fixed model only: no float reference, no comparisons, no per-pixel or truth
-    /// references (the fast path of `pipeline::fast`).
+    /// references, no memory images (the fast path of `pipeline::fast`).
     pub const FIXED_ONLY: RunOptions = RunOptions {
         reference: false,
+        pack_check: false,
         stage_local: false,
         dof_reference: false,
         max_memory: None,
@@ -83,6 +88,7 @@ impl RunOptions {
     /// No stage-local comparisons, no per-pixel reference: what sweeps and checks run.
     pub const FAST: RunOptions = RunOptions {
         reference: true,
+        pack_check: true,
         stage_local: false,
         dof_reference: false,
         max_memory: None,

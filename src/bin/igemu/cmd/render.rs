@@ -197,7 +197,12 @@ fn run_fast(
             ));
         }
     }
-    let e = pipeline::fast::emulate(scene, hw, a.s.opts(RunOptions::FIXED_ONLY), None)?;
+    // The memories' images only for --rom-out.
+    let opts = RunOptions {
+        pack_check: a.rom_out.is_some(),
+        ..RunOptions::FIXED_ONLY
+    };
+    let e = pipeline::fast::emulate(scene, hw, a.s.opts(opts), None)?;
     let (w, h) = (e.report.scene.width, e.report.scene.height);
     let stages = rom_stages(a, inputs, &e.steps)?;
     match e.channels.as_slice() {
