@@ -41,8 +41,17 @@ fn bench(c: &mut Criterion) {
     g.bench_function("fixed/linear12/tent4x4/binned", |b| {
         b.iter(|| {
             black_box(
-                accumulate::accumulate_tiles(samples, &region, Some(tiles), &[], &ap, 0, (w, h))
-                    .unwrap(),
+                accumulate::accumulate_tiles(
+                    samples,
+                    &region,
+                    Some(tiles),
+                    &[],
+                    &ap,
+                    0,
+                    (w, h),
+                    &igemu::stage::Pool::new(),
+                )
+                .unwrap(),
             )
         })
     });

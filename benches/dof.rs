@@ -74,7 +74,18 @@ fn bench(c: &mut Criterion) {
         black_box(layered_fixed(&img, &plan, &hw.dof, fmt).unwrap());
     });
     let tfull = best(&|| {
-        black_box(layered_fixed_exec(&img, &plan, &hw.dof, fmt, Exec::Full, |_| {}).unwrap());
+        black_box(
+            layered_fixed_exec(
+                &img,
+                &plan,
+                &hw.dof,
+                fmt,
+                Exec::Full,
+                |_| {},
+                &igemu::stage::Pool::new(),
+            )
+            .unwrap(),
+        );
     });
     let tplan = best(&|| {
         black_box(plan_layers(&fr.depth, &fr.coverage, 16, &lens, &hw.dof).unwrap());

@@ -274,6 +274,7 @@ fn assert_same_as_reference(s: &igemu::scene::Scene, h: &igemu::config::HwConfig
             &p,
             tap.bg,
             size,
+            &igemu::stage::Pool::new(),
         );
         let slow = reference(
             &tap.samples,

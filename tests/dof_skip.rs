@@ -22,11 +22,35 @@ const FRAME: QFormat = QFormat::new(false, 12, 0);
 /// Both executions of the fixed and float layered DoF agree bit for bit (outputs, work
 /// counts, skipped tiles, overflow errors). Returns the fast run's work and skipped tiles.
 fn check(img: &DepthImage<u32>, plan: &LayerPlan, p: &DofCfg, fmt: QFormat) -> Option<u64> {
-    let full = layered_fixed_exec(img, plan, p, fmt, Exec::Full, |_| {});
-    let fast = layered_fixed_exec(img, plan, p, fmt, Exec::SkipUniform, |_| {});
+    let full = layered_fixed_exec(
+        img,
+        plan,
+        p,
+        fmt,
+        Exec::Full,
+        |_| {},
+        &igemu::stage::Pool::new(),
+    );
+    let fast = layered_fixed_exec(
+        img,
+        plan,
+        p,
+        fmt,
+        Exec::SkipUniform,
+        |_| {},
+        &igemu::stage::Pool::new(),
+    );
     assert_eq!(full, fast, "fixed layered: skip vs full");
     for rows in [16, STRIP_ROWS] {
-        let strips = layered_fixed_exec(img, plan, p, fmt, Exec::Strips(rows), |_| {});
+        let strips = layered_fixed_exec(
+            img,
+            plan,
+            p,
+            fmt,
+            Exec::Strips(rows),
+            |_| {},
+            &igemu::stage::Pool::new(),
+        );
         assert_eq!(full, strips, "fixed layered: strips of {rows} rows vs full");
     }
     let vf: Vec<f64> = img.value.iter().map(|&v| v as f64 * 0.37).collect();
@@ -72,11 +96,27 @@ fn check_scene(scene: &Scene) {
     on.skip_uniform_tiles = true;
     let tiles = check(&img, &plan, &on, fmt).unwrap();
     // The option changes the counts only: fewer MACs and divides, the same codes.
-    let (o0, w0) = layered_fixed_exec(&img, &plan, &hw.dof, fmt, Exec::SkipUniform, |_| {})
-        .map(|r| (r.0, r.1))
-        .unwrap();
-    let (o1, w1, skipped) =
-        layered_fixed_exec(&img, &plan, &on, fmt, Exec::SkipUniform, |_| {}).unwrap();
+    let (o0, w0) = layered_fixed_exec(
+        &img,
+        &plan,
+        &hw.dof,
+        fmt,
+        Exec::SkipUniform,
+        |_| {},
+        &igemu::stage::Pool::new(),
+    )
+    .map(|r| (r.0, r.1))
+    .unwrap();
+    let (o1, w1, skipped) = layered_fixed_exec(
+        &img,
+        &plan,
+        &on,
+        fmt,
+        Exec::SkipUniform,
+        |_| {},
+        &igemu::stage::Pool::new(),
+    )
+    .unwrap();
     assert_eq!(o0, o1);
     assert!(tiles > 0 && skipped.iter().sum::<u64>() > 0);
     assert!(
@@ -197,8 +237,16 @@ fn flat_image_is_its_value() {
     };
     let tiles = check(&img, &plan, &p, FRAME).unwrap();
     assert_eq!(tiles, 3 * 2);
-    let (out, work, skipped) =
-        layered_fixed_exec(&img, &plan, &p, FRAME, Exec::SkipUniform, |_| {}).unwrap();
+    let (out, work, skipped) = layered_fixed_exec(
+        &img,
+        &plan,
+        &p,
+        FRAME,
+        Exec::SkipUniform,
+        |_| {},
+        &igemu::stage::Pool::new(),
+    )
+    .unwrap();
     assert!(out.iter().all(|&o| o == 1234));
     assert_eq!((work.macs, work.divides), (0, 0));
     assert_eq!(skipped, vec![(w * h) as u64]);

@@ -356,7 +356,7 @@ pub fn run(
     hw: &crate::config::HwConfig,
     plan: &Plan,
     opts: RunOptions,
-    memo: &dyn Memo,
+    (memo, pool): (&dyn Memo, &stage::Pool),
     input_keys: &[u64],
     input: &Taps,
     rows: u32,
@@ -442,6 +442,7 @@ pub fn run(
                 opts,
                 input_key: input_keys[j],
                 memo,
+                pool,
             };
             let (o, fixed) = execute_keep(st, &cx, &taps)?;
             merged[j].add(&o, id != StageId::Accumulate);
@@ -492,6 +493,7 @@ pub fn run(
                 opts,
                 input_key: input_keys[j],
                 memo,
+                pool,
             };
             let st = stage::get(id);
             let fixed = last_acc.take().expect("a band ran");

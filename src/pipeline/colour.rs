@@ -18,7 +18,7 @@ use crate::config::HwConfig;
 use crate::cycles;
 use crate::perceptual::{self, ContourReport};
 use crate::scene::Scene;
-use crate::stage::{PixelTapF, StageReport};
+use crate::stage::{PixelTapF, Pool, StageReport};
 use serde::Serialize;
 
 /// The channels' names, in order.
@@ -54,20 +54,18 @@ pub fn lane_totals<'a>(
 }
 
 /// The fixed DAC codes after the last of `steps`.
-pub fn fixed_codes(steps: &[Step]) -> Vec<u16> {
+pub fn fixed_codes(steps: &[Step], pool: &Pool) -> Vec<u16> {
     let taps = &steps.last().expect("a plan runs stages").outcome.taps;
-    taps.fixed
-        .pixels()
-        .codes
-        .iter()
-        .map(|&c| c as u16)
-        .collect()
+    let codes = &taps.fixed.pixels().codes;
+    let mut out = pool.take(codes.len());
+    out.extend(codes.iter().map(|&c| c as u16));
+    out
 }
 
 /// The DAC codes, fixed and float, after the last of `steps`.
 pub fn dac_codes(steps: &[Step]) -> (Vec<u16>, Vec<u16>) {
     let taps = &steps.last().expect("a plan runs stages").outcome.taps;
-    let dac = fixed_codes(steps);
+    let dac = fixed_codes(steps, &Pool::new());
     let dac_ref = match taps.float.pixels() {
         PixelTapF::Codes(c) => c.iter().map(|&c| c as u16).collect(),
         PixelTapF::Values(_) => unreachable!("the last stage writes DAC codes"),

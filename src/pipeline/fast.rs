@@ -14,8 +14,9 @@ use crate::config::HwConfig;
 use crate::cycles::CycleReport;
 use crate::error::Result;
 use crate::scene::Scene;
-use crate::stage::{RunOptions, StageReport};
+use crate::stage::{Pool, RunOptions, StageReport};
 use serde::Serialize;
+use std::sync::Arc;
 
 /// One channel of a fixed-only colour run (`colour.channels` of the JSON report).
 #[derive(Clone, Debug, Serialize)]
@@ -73,6 +74,8 @@ pub struct Emulation {
     pub plan: Plan,
     /// Every stage run, in order, with the fixed taps after it (channel 0's lane).
     pub steps: Vec<Step>,
+    /// The steps after visibility of channels 1.. of a colour render (one list each).
+    pub lanes: Vec<Vec<Step>>,
     /// Each channel's DAC codes (one plane for grey), row-major.
     pub channels: Vec<Vec<u16>>,
     /// Each channel's DAC width.
@@ -82,15 +85,67 @@ pub struct Emulation {
 /// Runs the fixed model of `scene` on `hw` (no float reference, no comparison): the DAC
 /// codes, the cycle model and the cost. `opts` gives the memory limit, the band height and
 /// whether the memories' images are built and pack-checked (`--rom-out` needs them); the
-/// reference options are off.
+/// reference options are off. A one-shot run: see [`Emulator`] for a run of frames.
 pub fn emulate(
     scene: &Scene,
     hw: &HwConfig,
     opts: RunOptions,
     cache: Option<&Cache>,
 ) -> Result<Emulation> {
-    // On the pool, as a render (see `super::render_with`).
-    rayon::scope(|_| emulate_on_pool(scene, hw, opts, cache))
+    Emulator::new().emulate(scene, hw, opts, cache)
+}
+
+/// The fixed-only path over a run of frames (a sequence, a benchmark, the rows of a
+/// sweep): the planes of the taps live across frames in a [`Pool`], so a frame whose
+/// emulation is given back with [`Emulator::recycle`] leaves its buffers to the next, and
+/// from the second frame of the same screen on a run allocates no frame-sized buffer
+/// (tests/frame_pool.rs counts them). The codes are those of [`emulate`], bit for bit.
+#[derive(Debug, Default)]
+pub struct Emulator {
+    pool: Pool,
+}
+
+impl Emulator {
+    /// An emulator with an empty pool.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The buffers it keeps.
+    pub fn pool(&self) -> &Pool {
+        &self.pool
+    }
+
+    /// [`emulate`] with the planes taken from the pool.
+    pub fn emulate(
+        &self,
+        scene: &Scene,
+        hw: &HwConfig,
+        opts: RunOptions,
+        cache: Option<&Cache>,
+    ) -> Result<Emulation> {
+        // On the pool, as a render (see `super::render_with`).
+        rayon::scope(|_| emulate_on_pool(scene, hw, opts, cache, &self.pool))
+    }
+
+    /// Gives the planes of a finished frame back to the pool (the codes, and every tap no
+    /// one else holds: a cache that kept a stage's outcome keeps its planes).
+    pub fn recycle(&self, e: Emulation) {
+        for c in e.channels {
+            self.pool.give(c);
+        }
+        let taps: Vec<_> = e
+            .steps
+            .into_iter()
+            .chain(e.lanes.into_iter().flatten())
+            .filter_map(|s| Arc::try_unwrap(s.outcome).ok())
+            .map(|o| o.taps)
+            .collect();
+        self.pool.recycle(taps);
+        if let Ok(host) = Arc::try_unwrap(e.plan.host) {
+            self.pool.give(host.prims);
+        }
+    }
 }
 
 fn emulate_on_pool(
@@ -98,6 +153,7 @@ fn emulate_on_pool(
     hw: &HwConfig,
     opts: RunOptions,
     cache: Option<&Cache>,
+    pool: &Pool,
 ) -> Result<Emulation> {
     let opts = RunOptions {
         max_memory: opts.max_memory,
@@ -105,9 +161,9 @@ fn emulate_on_pool(
         pack_check: opts.pack_check,
         ..RunOptions::FIXED_ONLY
     };
-    let plan = plan::build(scene, hw)?;
+    let plan = plan::build_in(scene, hw, pool)?;
     super::check_memory(scene, &plan, opts)?;
-    let (steps, lanes) = run::run_lanes(scene, hw, &plan, opts, cache, None)?;
+    let (steps, lanes) = run::run_lanes(scene, hw, &plan, opts, cache, None, pool)?;
     let hw0 = hw.channel(0);
     let t = totals(scene, &hw0, &plan, (&steps, &lanes), cache);
     // Channel 0's lane (a grey run's steps are all its own).
@@ -120,7 +176,7 @@ fn emulate_on_pool(
         }
     };
     let n = plan.layout.channels;
-    let codes: Vec<Vec<u16>> = (0..n).map(|c| fixed_codes(lane(c))).collect();
+    let codes: Vec<Vec<u16>> = (0..n).map(|c| fixed_codes(lane(c), pool)).collect();
     let bits: Vec<u32> = (0..n).map(|c| hw.channel(c).gamma.dac_bits).collect();
     let channels = if n > 1 {
         (0..n)
@@ -159,6 +215,7 @@ fn emulate_on_pool(
         report,
         plan,
         steps,
+        lanes,
         channels: codes,
         bits,
     })

@@ -147,7 +147,15 @@ fn render_on_pool(
             "the depth-of-field truth (--dof-truth) of a colour render is not modelled yet: render a grey scene (colour = false) for the truth",
         )));
     }
-    let (steps, lanes) = run::run_lanes(scene, hw, &plan, opts, cache, None)?;
+    let (steps, lanes) = run::run_lanes(
+        scene,
+        hw,
+        &plan,
+        opts,
+        cache,
+        None,
+        &crate::stage::Pool::new(),
+    )?;
     // Channel 0's configuration: the report's end-to-end figures are its lane's.
     let hw0 = hw.channel(0);
     let (dac, dac_ref) = colour::dac_codes(&steps);
@@ -279,7 +287,15 @@ pub fn run_through_channel(
             Vec::new(),
         )
     } else {
-        run::run_lanes(scene, hw, &plan, opts, None, Some(last))?
+        run::run_lanes(
+            scene,
+            hw,
+            &plan,
+            opts,
+            None,
+            Some(last),
+            &crate::stage::Pool::new(),
+        )?
     };
     let lane = lanes.get(c.wrapping_sub(1)).unwrap_or(&steps);
     let taps = lane.last().expect("the plan runs it").outcome.taps.clone();

@@ -21,9 +21,9 @@
 use crate::config::HwConfig;
 use crate::error::{FileError, Result};
 use crate::fnv::Fnv;
-use crate::scene::{GuardBand, HostScene, Scene, front_end};
+use crate::scene::{GuardBand, HostScene, Scene, front_end_in};
 use crate::stage::accumulate::{Kernel, kernel, regions};
-use crate::stage::{self, Grid, Layout, Need, Region, StageId, Tiles, input, ms_since};
+use crate::stage::{self, Grid, Layout, Need, Pool, Region, StageId, Tiles, input, ms_since};
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -149,11 +149,16 @@ pub fn decide(scene: &Scene, hw: &HwConfig) -> Result<(Vec<Decision>, Vec<StageI
 
 /// Builds the plan: decisions, host front end, region and tiles.
 pub fn build(scene: &Scene, hw: &HwConfig) -> Result<Plan> {
+    build_in(scene, hw, &Pool::new())
+}
+
+/// [`build`] with the host front end's primitive list from `pool` (a run of frames).
+pub fn build_in(scene: &Scene, hw: &HwConfig, pool: &Pool) -> Result<Plan> {
     let (width, height) = (scene.image.width, scene.image.height);
     let guard = guard_band(scene, hw)?;
     let (decisions, order) = decide(scene, hw)?;
     let t = Instant::now();
-    let host = front_end(scene, &guard);
+    let host = front_end_in(scene, &guard, None, pool.take(0));
     let host_ms = ms_since(t);
     let grid = Grid::new(hw.raster.samples, hw.subpixel_bits(), width, height);
     let prints = input::footprints(&host, hw);

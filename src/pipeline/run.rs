@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::fnv::Fnv;
 use crate::scene::Scene;
 use crate::stage::{
-    self, AnyFixed, ChannelFrames, Cx, DynStage, MemImage, Memo, NoMemo, RunOptions, StageId,
+    self, AnyFixed, ChannelFrames, Cx, DynStage, MemImage, Memo, NoMemo, Pool, RunOptions, StageId,
     StageReport, Taps, Tokens, ms_since,
 };
 use std::sync::Arc;
@@ -55,14 +55,15 @@ pub fn run(
     cache: Option<&Cache>,
     last: Option<StageId>,
 ) -> Result<Vec<Step>> {
-    run_lanes(scene, hw, plan, opts, cache, last).map(|(steps, _)| steps)
+    run_lanes(scene, hw, plan, opts, cache, last, &Pool::new()).map(|(steps, _)| steps)
 }
 
 /// Runs the plan's stages in order, through `last` (all when `None`). The geometry stages
 /// (input to visibility) run once and carry every channel; for a colour render the stages
 /// after visibility then run once per channel, each on its channel's samples with its
 /// channel's word widths ([`HwConfig::channel`]): channel 0's steps come first (with the
-/// geometry's), then the steps after visibility of channels 1.. (one list each).
+/// geometry's), then the steps after visibility of channels 1.. (one list each). The
+/// stages take their planes from `pool` (an empty one for a one-shot run).
 pub fn run_lanes(
     scene: &Scene,
     hw: &HwConfig,
@@ -70,6 +71,7 @@ pub fn run_lanes(
     opts: RunOptions,
     cache: Option<&Cache>,
     last: Option<StageId>,
+    pool: &Pool,
 ) -> Result<(Vec<Step>, Vec<Vec<Step>>)> {
     let memo: &dyn Memo = match cache {
         Some(c) => c,
@@ -102,6 +104,7 @@ pub fn run_lanes(
         opts,
         cache,
         memo,
+        pool,
         last,
         band_rows,
     };
@@ -132,6 +135,7 @@ pub fn run_lanes(
             opts,
             input_key: lanes[0].key,
             memo,
+            pool,
         };
         if stage::get(id).reads_channels(&cx) {
             share_frames(&mut lanes);
@@ -197,6 +201,7 @@ struct Runner<'a> {
     opts: RunOptions,
     cache: Option<&'a Cache>,
     memo: &'a dyn Memo,
+    pool: &'a Pool,
     last: Option<StageId>,
     band_rows: Option<u32>,
 }
@@ -224,6 +229,7 @@ impl Runner<'_> {
                 opts,
                 input_key: key,
                 memo: self.memo,
+                pool: self.pool,
             };
             let k = stage_key(stage, &cx, key, opts);
             if let Some(rows) = self.band_rows.filter(|_| super::bands::is_banded(id)) {
@@ -245,8 +251,17 @@ impl Runner<'_> {
                     ins.push(cx.input_key);
                     keys.push(stage_key(stage::get(g), &cx, cx.input_key, opts));
                 }
-                let outs =
-                    super::bands::run(&group, scene, hw, plan, opts, self.memo, &ins, &taps, rows)?;
+                let outs = super::bands::run(
+                    &group,
+                    scene,
+                    hw,
+                    plan,
+                    opts,
+                    (self.memo, self.pool),
+                    &ins,
+                    &taps,
+                    rows,
+                )?;
                 for ((&g, &gk), o) in group.iter().zip(&keys).zip(outs) {
                     taps = o.taps.clone();
                     key = gk;
@@ -309,7 +324,9 @@ fn banded_tap(scene: &Scene, id: StageId, rows: u32) -> crate::error::Error {
 
 /// Runs one stage through the contract on the taps of its input.
 fn execute(stage: &dyn DynStage, cx: &Cx, input: &Taps) -> Result<Outcome> {
-    execute_keep(stage, cx, input).map(|o| o.0)
+    let (outcome, fixed) = execute_keep(stage, cx, input)?;
+    stage.recycle(fixed, cx.pool);
+    Ok(outcome)
 }
 
 /// [`execute`], also returning the stage's private result.

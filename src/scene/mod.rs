@@ -28,7 +28,9 @@ use crate::error::FileError;
 use crate::files::{Source, TomlFile};
 use serde::Serialize;
 
-pub use project::{LensPoint, depth_from_screen_z, front_end, front_end_through, screen_z};
+pub use project::{
+    LensPoint, depth_from_screen_z, front_end, front_end_in, front_end_through, screen_z,
+};
 pub use shade::shade_vertex;
 pub use tessellate::{Mesh, primitive_count, tessellate};
 

@@ -412,6 +412,18 @@ pub fn front_end(scene: &Scene, guard: &GuardBand) -> HostScene {
 /// fixed, and screen-space objects moved by the parallax of their depth. The guard-band clip
 /// comes after the shear, so every view is clipped in its own screen.
 pub fn front_end_through(scene: &Scene, guard: &GuardBand, lens: Option<LensPoint>) -> HostScene {
+    front_end_in(scene, guard, lens, Vec::new())
+}
+
+/// [`front_end_through`] emitting the primitives into `prims` (cleared first: a list kept
+/// from an earlier frame, so that a run of frames does not allocate it again).
+pub fn front_end_in(
+    scene: &Scene,
+    guard: &GuardBand,
+    lens: Option<LensPoint>,
+    mut prims: Vec<Primitive>,
+) -> HostScene {
+    prims.clear();
     let view = View::new(&scene.camera, scene.image.width, scene.image.height, lens);
     let eye = view.eye;
     let ambient = scene.shading.ambient;
@@ -420,7 +432,7 @@ pub fn front_end_through(scene: &Scene, guard: &GuardBand, lens: Option<LensPoin
     let mut out = Out {
         view,
         guard,
-        prims: Vec::new(),
+        prims,
         stats: FrontEndStats::default(),
     };
     out.stats.objects = scene.objects.len();

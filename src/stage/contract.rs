@@ -182,6 +182,8 @@ pub struct Cx<'a> {
     pub input_key: u64,
     /// Shared values.
     pub memo: &'a dyn Memo,
+    /// Buffers kept across the frames of a run (see [`super::pool`]).
+    pub pool: &'a super::Pool,
 }
 
 /// The contract of a stage (see the module docs).
@@ -226,6 +228,9 @@ pub trait Stage: Sync + 'static {
     fn reads_channels(&self, _cx: &Cx) -> bool {
         false
     }
+    /// Gives the planes of the private result back to `pool` once the runner is done with
+    /// it (buffers that live across frames, see [`super::pool`]); by default it is dropped.
+    fn recycle(&self, _fixed: Self::Fixed, _pool: &super::Pool) {}
 }
 
 /// A stage's private result, type-erased.
@@ -260,6 +265,8 @@ pub trait DynStage: Sync {
     fn memories(&self, cx: &Cx, fixed: &AnyFixed, output: &Taps) -> Vec<MemImage>;
     /// [`Stage::reads_channels`].
     fn reads_channels(&self, cx: &Cx) -> bool;
+    /// [`Stage::recycle`].
+    fn recycle(&self, fixed: AnyFixed, pool: &super::Pool);
 }
 
 fn typed<S: Stage>(f: &AnyFixed) -> &S::Fixed {
@@ -305,5 +312,10 @@ impl<S: Stage> DynStage for S {
     }
     fn reads_channels(&self, cx: &Cx) -> bool {
         Stage::reads_channels(self, cx)
+    }
+    fn recycle(&self, fixed: AnyFixed, pool: &super::Pool) {
+        if let Ok(f) = fixed.downcast::<S::Fixed>() {
+            Stage::recycle(self, *f, pool);
+        }
     }
 }

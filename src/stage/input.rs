@@ -137,6 +137,16 @@ pub struct Quantized {
 /// Fixed model: quantises every primitive of the host scene (the intensity of `channels`
 /// channels).
 pub fn quantize(host: &HostScene, hw: &HwConfig, channels: usize) -> Result<Quantized> {
+    quantize_into(host, hw, channels, Vec::new())
+}
+
+/// [`quantize`] into the list `out` (cleared first; one kept from an earlier frame).
+pub fn quantize_into(
+    host: &HostScene,
+    hw: &HwConfig,
+    channels: usize,
+    mut out: Vec<QPrim>,
+) -> Result<Quantized> {
     let mut qs = Quantizers {
         hw,
         channels,
@@ -153,7 +163,8 @@ pub fn quantize(host: &HostScene, hw: &HwConfig, channels: usize) -> Result<Quan
             .collect(),
         local: LocalError::default(),
     };
-    let mut out = Vec::with_capacity(host.prims.len());
+    out.clear();
+    out.reserve(host.prims.len());
     let mut vertices = 0u64;
     for p in &host.prims {
         vertices += vertices_of(p) as u64;
@@ -363,7 +374,7 @@ impl Stage for Input {
 
     fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(Self::Fixed, Facts)> {
         let host = taps.host();
-        let q = quantize(host, cx.hw, cx.layout.channels)?;
+        let q = quantize_into(host, cx.hw, cx.layout.channels, cx.pool.take(0))?;
         let bg = background_code(host, cx.hw);
         let order = processing_order(
             |i| matches!(host.prims[i], Primitive::Point { .. }),

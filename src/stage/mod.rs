@@ -14,6 +14,7 @@ pub mod gamma;
 pub mod input;
 pub mod logdomain;
 pub mod parts;
+pub mod pool;
 pub mod raster;
 pub mod setup;
 pub mod taps;
@@ -26,6 +27,7 @@ mod report;
 pub use crate::stage_id::StageId;
 pub use contract::{AnyFixed, Cx, DynStage, Memo, Need, NoMemo, RunOptions, Stage, memo};
 pub use layout::{Band, Grid, Layout, Region, SampleRegion, Tiles};
+pub use pool::Pool;
 pub use report::{
     Cost, Facts, LocalError, MemImage, MemKind, Memory, Notes, StageReport, TokenKind, Tokens,
     Unit, WeberCompare, ms_since, weber_of,

@@ -370,10 +370,8 @@ impl Stage for SetupStage {
     fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(usize, Facts)> {
         let mut w = SetupWork::default();
         let prims = &taps.fixed.prims().q;
-        let setups: Vec<Setup> = prims
-            .iter()
-            .map(|p| setup(p, &cx.layout.grid, &mut w))
-            .collect();
+        let mut setups: Vec<Setup> = cx.pool.take(prims.len());
+        setups.extend(prims.iter().map(|p| setup(p, &cx.layout.grid, &mut w)));
         let n = setups.len();
         taps.fixed.setups = Some(Arc::new(setups));
         let facts = Facts {

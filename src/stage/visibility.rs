@@ -38,12 +38,17 @@ pub struct Samples {
 impl Samples {
     /// A cleared buffer.
     pub fn new(reg: SampleRegion, background_i: u32) -> Self {
+        Self::cleared(reg, background_i, &super::Pool::new())
+    }
+
+    /// A cleared buffer, its planes from `pool`.
+    pub fn cleared(reg: SampleRegion, background_i: u32, pool: &super::Pool) -> Self {
         let n = reg.len();
         Self {
             reg,
-            z: vec![u32::MAX; n],
-            prim: vec![BACKGROUND; n],
-            i: vec![background_i; n],
+            z: pool.filled(n, u32::MAX),
+            prim: pool.filled(n, BACKGROUND),
+            i: pool.filled(n, background_i),
         }
     }
 }
@@ -337,9 +342,9 @@ impl Stage for Visibility {
         let mut w = VisWork::default();
         let reg = cx.layout.samples;
         let channels = cx.layout.channels;
-        let mut buf = Samples::new(reg, prims.bg[0]);
+        let mut buf = Samples::cleared(reg, prims.bg[0], cx.pool);
         let mut extra: Vec<Vec<u32>> = (1..channels)
-            .map(|c| vec![prims.bg[c]; reg.len()])
+            .map(|c| cx.pool.filled(reg.len(), prims.bg[c]))
             .collect();
         let n = prims.q.len();
         let mut tests = vec![0u64; n];
@@ -401,8 +406,8 @@ impl Stage for Visibility {
             .into_iter()
             .map(|i| Samples {
                 reg,
-                z: buf.z.clone(),
-                prim: buf.prim.clone(),
+                z: cx.pool.copy(&buf.z),
+                prim: cx.pool.copy(&buf.prim),
                 i,
             })
             .collect();

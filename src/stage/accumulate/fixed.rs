@@ -8,8 +8,8 @@ use super::span::{self, Build, Dst, Scratch, Span};
 use super::window::{ProductStats, WindowSums, sums_fit_u32};
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, SignalStats, round_shift_i64};
-use crate::stage::Region;
 use crate::stage::visibility::{BACKGROUND, Samples};
+use crate::stage::{Pool, Region};
 use rayon::prelude::*;
 
 /// Per-pixel outputs of the accumulate stage.
@@ -25,6 +25,20 @@ pub struct Frame {
     pub depth: Vec<u32>,
     /// Covered samples in the pixel's own `n x n` block (alpha = coverage / n^2).
     pub coverage: Vec<u16>,
+}
+
+impl Frame {
+    /// A frame of the background code `bg` (no depth, no coverage), its planes from `pool`.
+    pub fn cleared(width: u32, height: u32, bg: u32, pool: &Pool) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            acc: pool.filled(n, bg),
+            depth: pool.filled(n, u32::MAX),
+            coverage: pool.filled(n, 0),
+        }
+    }
 }
 
 /// Work of the accumulate stage.
@@ -186,14 +200,16 @@ pub fn accumulate(
     bg_i: u32,
     size: (u32, u32),
 ) -> Result<(Frame, AccWork, Vec<SignalStats>)> {
-    accumulate_tiles(s, region, None, points, p, bg_i, size).map(|(f, w, st, _)| (f, w, st))
+    accumulate_tiles(s, region, None, points, p, bg_i, size, &Pool::new())
+        .map(|(f, w, st, _)| (f, w, st))
 }
 
 /// Fixed model limited to the touched tiles of `region` (all of it with `None`): a pixel
 /// of an untouched tile sees only background samples, so it takes the background code
 /// (the kernel's weights sum to exactly `2^f`, so the result is the same bit for bit).
 /// Also returns the frame read-modify-writes (fragments and point updates) per tile
-/// (empty with `None`).
+/// (empty with `None`). The frame's planes come from `pool`.
+#[allow(clippy::too_many_arguments)]
 pub fn accumulate_tiles(
     s: &Samples,
     region: &Region,
@@ -202,8 +218,9 @@ pub fn accumulate_tiles(
     p: &AccParams,
     bg_i: u32,
     size: (u32, u32),
+    pool: &Pool,
 ) -> Result<(Frame, AccWork, Vec<SignalStats>, Vec<u64>)> {
-    accumulate_build(s, region, tiles, points, p, bg_i, size, None)
+    accumulate_build(s, region, tiles, points, p, bg_i, (size, pool), None)
 }
 
 /// [`accumulate_tiles`], with the window kernel's build forced by `force` (tests compare
@@ -216,19 +233,12 @@ pub(super) fn accumulate_build(
     points: &[PointFrags<u32>],
     p: &AccParams,
     bg_i: u32,
-    size: (u32, u32),
+    (size, pool): ((u32, u32), &Pool),
     force: Option<Build>,
 ) -> Result<(Frame, AccWork, Vec<SignalStats>, Vec<u64>)> {
     let (width, height) = size;
-    let npix = width as usize * height as usize;
     let bg = p.background_code(bg_i)?;
-    let mut frame = Frame {
-        width,
-        height,
-        acc: vec![bg; npix],
-        depth: vec![u32::MAX; npix],
-        coverage: vec![0; npix],
-    };
+    let mut frame = Frame::cleared(width, height, bg, pool);
     let k = &p.kernel;
     let template = SignalStats::new("accumulate.product", p.frame.format);
     // The word of the window sums, from the largest intensity code in the buffer.

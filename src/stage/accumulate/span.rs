@@ -271,8 +271,17 @@ mod tests {
                 frame: hw.accumulate.frame,
             };
             let run = |b: Build| {
-                accumulate_build(&s, &region, None, &[], &p, 7, (48, 32), Some(b))
-                    .expect("accumulates")
+                accumulate_build(
+                    &s,
+                    &region,
+                    None,
+                    &[],
+                    &p,
+                    7,
+                    ((48, 32), &crate::stage::Pool::new()),
+                    Some(b),
+                )
+                .expect("accumulates")
             };
             let first = run(builds[0]);
             assert!(

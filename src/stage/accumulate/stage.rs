@@ -122,6 +122,7 @@ impl Stage for Accumulate {
                     &ap,
                     s.bg,
                     size,
+                    cx.pool,
                 )?;
                 let facts = Facts {
                     work: vec![
@@ -319,7 +320,6 @@ fn log_accumulate(
     let w_min = k.w.iter().copied().filter(|&w| w > 0).min().unwrap_or(1);
     let add = LogAdder::new(code, &cx.hw.coding, k.f, w_min);
     let (width, height) = size;
-    let npix = width as usize * height as usize;
     let l = cx.layout;
     let (region, tiles) = (l.region, &l.tiles);
     let samples = &s.samples;
@@ -331,13 +331,7 @@ fn log_accumulate(
     let bg_code = accumulate_pixel(&add, k.w.iter().map(|&w| (s.bg, w)), &mut bg_work);
     work.frame.merge(&bg_work.frame);
     work.term.merge(&bg_work.term);
-    let mut frame = Frame {
-        width,
-        height,
-        acc: vec![bg_code as u32; npix],
-        depth: vec![u32::MAX; npix],
-        coverage: vec![0; npix],
-    };
+    let mut frame = Frame::cleared(width, height, bg_code as u32, cx.pool);
     let rows: Vec<(Vec<PixelOut>, LogWork)> = (region.y0..region.y1)
         .into_par_iter()
         .map(|py| {

@@ -9,6 +9,7 @@ use super::strip::{LayerCx, run_strip, strip_rows};
 use super::uniform;
 use crate::config::DofCfg;
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift, round_shift_i64};
+use crate::stage::Pool;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Mutex;
@@ -177,8 +178,17 @@ pub fn layered_fixed(
     p: &DofCfg,
     frame_fmt: QFormat,
 ) -> Result<(Vec<u32>, DofWork), (String, u32)> {
-    layered_fixed_exec(img, plan, p, frame_fmt, Exec::Strips(STRIP_ROWS), |_| {})
-        .map(|r| (r.0, r.1))
+    let pool = Pool::new();
+    layered_fixed_exec(
+        img,
+        plan,
+        p,
+        frame_fmt,
+        Exec::Strips(STRIP_ROWS),
+        |_| {},
+        &pool,
+    )
+    .map(|r| (r.0, r.1))
 }
 
 /// [`layered_fixed`], showing `observe` each blurred layer's planes after its horizontal
@@ -190,7 +200,9 @@ pub fn layered_fixed_observed(
     frame_fmt: QFormat,
     observe: impl FnMut(&LayerPlanes),
 ) -> Result<(Vec<u32>, DofWork), (String, u32)> {
-    layered_fixed_exec(img, plan, p, frame_fmt, Exec::SkipUniform, observe).map(|r| (r.0, r.1))
+    let pool = Pool::new();
+    layered_fixed_exec(img, plan, p, frame_fmt, Exec::SkipUniform, observe, &pool)
+        .map(|r| (r.0, r.1))
 }
 
 /// The output codes, the work counts and per layer the pixels of skipped uniform tiles.
@@ -198,6 +210,7 @@ pub type FixedRun = (Vec<u32>, DofWork, Vec<u64>);
 
 /// [`layered_fixed_observed`] computed as `exec` says. Also returns per layer the box pixels
 /// in skipped uniform tiles (all 0 unless `dof.skip_uniform_tiles`; the same for any `exec`).
+/// The planes and the threads' scratch come from `pool`.
 pub fn layered_fixed_exec(
     img: &DepthImage<u32>,
     plan: &LayerPlan,
@@ -205,6 +218,7 @@ pub fn layered_fixed_exec(
     frame_fmt: QFormat,
     exec: Exec,
     observe: impl FnMut(&LayerPlanes),
+    pool: &Pool,
 ) -> Result<FixedRun, (String, u32)> {
     // In strips, the planes are u32 words where every value fits: the input colour (a code
     // times n2), the saturated line buffer and the alpha sums (the taps' sum times n2).
@@ -222,9 +236,9 @@ pub fn layered_fixed_exec(
         && fits(csum.saturating_mul(n2))
         && p.line_bits <= 32;
     if narrow {
-        exec_with::<u32>(img, plan, p, frame_fmt, exec, observe)
+        exec_with::<u32>(img, plan, p, frame_fmt, (exec, pool), observe)
     } else {
-        exec_with::<u64>(img, plan, p, frame_fmt, exec, observe)
+        exec_with::<u64>(img, plan, p, frame_fmt, (exec, pool), observe)
     }
 }
 
@@ -234,7 +248,7 @@ fn exec_with<P: Plane>(
     plan: &LayerPlan,
     p: &DofCfg,
     frame_fmt: QFormat,
-    exec: Exec,
+    (exec, buffers): (Exec, &Pool),
     mut observe: impl FnMut(&LayerPlanes),
 ) -> Result<FixedRun, (String, u32)> {
     let (w, h) = (img.width, img.height);
@@ -243,14 +257,14 @@ fn exec_with<P: Plane>(
     let mut skipped = vec![0u64; plan.layers.len()];
     // A composite never exceeds the largest code times 2^g (every colour is a weighted mean
     // of codes, docs/dof.md): u64 words.
-    let mut out = vec![0u64; w * h];
-    let mut def = vec![false; w * h];
+    let mut out = buffers.filled(w * h, 0u64);
+    let mut def = buffers.filled(w * h, false);
     let one_q = 1u128 << q;
     let boxes = layer_boxes(w, h, plan);
     // One scratch per thread, kept across strips and layers.
-    let pool: Vec<Mutex<Scratch<P>>> = (0..rayon::current_num_threads().max(1))
-        .map(|_| Mutex::new(Scratch::new()))
-        .collect();
+    let threads = rayon::current_num_threads().max(1);
+    let mut pool: Vec<Mutex<Scratch<P>>> = buffers.reuse();
+    pool.resize_with(threads, || Mutex::new(Scratch::new()));
     for (l, layer) in plan.layers.iter().enumerate() {
         let Some((x0, y0, x1, y1)) = boxes[l] else {
             continue;
@@ -361,14 +375,15 @@ fn exec_with<P: Plane>(
     // The composite carries `g` guard bits below the frame LSB.
     let frame_q = Quantizer::new(frame_fmt, p.quant, Overflow::Sat);
     let raw_frac = (g + frame_fmt.frac_bits) as i32;
-    let res = out
-        .iter()
-        .map(|&v| {
-            let r = frame_q.quantize_raw(i128::from(v), raw_frac);
-            work.out_overflows += u64::from(r.overflow);
-            r.code as u32
-        })
-        .collect();
+    let mut res = buffers.take(out.len());
+    res.extend(out.iter().map(|&v| {
+        let r = frame_q.quantize_raw(i128::from(v), raw_frac);
+        work.out_overflows += u64::from(r.overflow);
+        r.code as u32
+    }));
+    buffers.give(out);
+    buffers.give(def);
+    buffers.give(pool);
     Ok((res, work, skipped))
 }
 

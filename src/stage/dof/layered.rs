@@ -5,7 +5,7 @@
 use super::method::{Method, half_size_error, n2};
 use super::{
     DepthImage, Exec, LayerPlan, LayerWork, LensMap, STRIP_ROWS, layer_work, layered_f64,
-    layered_fixed_exec, overflow_signal, overflow_signal_in, plan_layers,
+    layered_fixed_exec, overflow_signal, overflow_signal_in, plan_layers_in,
 };
 use crate::config::DofKernel;
 use crate::error::{Error, Result};
@@ -27,18 +27,25 @@ impl Method for Layered {
         let hw = cx.hw;
         let p = &hw.dof;
         let frame_fmt = hw.accumulate.frame.format;
-        let mut plan = plan_layers(&frame.depth, &frame.coverage, n2(cx), lens, p)
+        let mut plan = plan_layers_in(&frame.depth, &frame.coverage, n2(cx), lens, p, cx.pool)
             .map_err(|msg| half_size_error(cx, msg))?;
         let img = DepthImage::of_frame(frame, &frame.acc, n2(cx));
-        let (out, work, skipped) =
-            layered_fixed_exec(&img, &plan, p, frame_fmt, Exec::Strips(STRIP_ROWS), |_| {})
-                .map_err(|(signal, bits)| Error::Overflow {
-                    signal,
-                    format: format!("UQ{bits}.0"),
-                    value: 1i128 << bits,
-                    min: 0,
-                    max: ((1u128 << bits.min(63)) - 1) as i64,
-                })?;
+        let (out, work, skipped) = layered_fixed_exec(
+            &img,
+            &plan,
+            p,
+            frame_fmt,
+            Exec::Strips(STRIP_ROWS),
+            |_| {},
+            cx.pool,
+        )
+        .map_err(|(signal, bits)| Error::Overflow {
+            signal,
+            format: format!("UQ{bits}.0"),
+            value: 1i128 << bits,
+            min: 0,
+            max: ((1u128 << bits.min(63)) - 1) as i64,
+        })?;
         let mut facts = Facts {
             work: vec![
                 ("layers", plan.layers.len() as u64),

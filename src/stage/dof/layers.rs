@@ -6,6 +6,7 @@ use super::lens::{LensMap, SIGMA_FRAC};
 use super::mask::taps_fixed;
 use crate::config::DofKernel;
 use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
+use crate::stage::Pool;
 use serde::Serialize;
 
 /// One depth layer.
@@ -103,18 +104,27 @@ pub fn plan_layers(
     lens: &LensMap,
     p: &DofCfg,
 ) -> Result<LayerPlan, String> {
+    plan_layers_in(key, cov, n2, lens, p, &Pool::new())
+}
+
+/// [`plan_layers`] with its planes (the depth codes sorted, the layer index) from `pool`.
+pub fn plan_layers_in(
+    key: &[u32],
+    cov: &[u16],
+    n2: u32,
+    lens: &LensMap,
+    p: &DofCfg,
+    pool: &Pool,
+) -> Result<LayerPlan, String> {
     // The background code (most pixels of a typical frame) is added once, not sorted; nor
     // is a pixel repeating its left neighbour's code.
     let mut last = u32::MAX;
-    let mut keys: Vec<u32> = key
-        .iter()
-        .copied()
-        .filter(|&k| {
-            let new = k != u32::MAX && k != last;
-            last = k;
-            new
-        })
-        .collect();
+    let mut keys: Vec<u32> = pool.take(key.len() + 1);
+    keys.extend(key.iter().copied().filter(|&k| {
+        let new = k != u32::MAX && k != last;
+        last = k;
+        new
+    }));
     if key.contains(&u32::MAX) || cov.iter().any(|&c| (c as u32) < n2) {
         keys.push(u32::MAX);
     }
@@ -125,7 +135,8 @@ pub fn plan_layers(
     // so the largest mask over the depth codes present bounds them all: check it before any
     // mask is built (a huge lens would otherwise allocate huge masks), and name it, so that
     // raising the limit to it is enough.
-    let sigs: Vec<f64> = keys.iter().map(|&k| sig(k)).collect();
+    let mut sigs: Vec<f64> = pool.take(keys.len());
+    sigs.extend(keys.iter().map(|&k| sig(k)));
     if let Some((&worst, &s)) = keys
         .iter()
         .zip(&sigs)
@@ -221,15 +232,13 @@ pub fn plan_layers(
     };
     // Runs of one depth code are common: the layer is searched once per run.
     let mut last = (u32::MAX, find(u32::MAX) as u16);
-    let index: Vec<u16> = key
-        .iter()
-        .map(|&k| {
-            if k != last.0 {
-                last = (k, find(k) as u16);
-            }
-            last.1
-        })
-        .collect();
+    let mut index: Vec<u16> = pool.take(key.len());
+    index.extend(key.iter().map(|&k| {
+        if k != last.0 {
+            last = (k, find(k) as u16);
+        }
+        last.1
+    }));
     for &l in &index {
         layers[l as usize].pixels += 1;
     }
@@ -238,6 +247,8 @@ pub fn plan_layers(
     } else {
         None
     };
+    pool.give(keys);
+    pool.give(sigs);
     Ok(LayerPlan {
         layers,
         index,

@@ -119,7 +119,9 @@ pub use fixed::{
 };
 pub use float::{layered_f64, layered_f64_exec};
 pub use kernel::{FITTED_SCALE, Mask2, disc_f64, disc_half_size, gaussian_sigma, kernel_half_size};
-pub use layers::{DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layers};
+pub use layers::{
+    DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layers, plan_layers_in,
+};
 pub use lens::{G_FRAC, LensMap, SIGMA_FRAC};
 pub use mask::{difference_degree, half_size, mask_difference, taps_f64, taps_fixed};
 pub use method::Method;

@@ -19,7 +19,9 @@ use crate::fixed::QFormat;
 use crate::scene::{Lens, Scene};
 use crate::stage::accumulate::Frame;
 use crate::stage::taps::{ChannelFrames, FrameCoding, FrameTap, Taps};
-use crate::stage::{Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, Tokens};
+use crate::stage::{
+    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Pool, Stage, StageId, Tokens,
+};
 use std::sync::Arc;
 
 /// The plan of the configured method.
@@ -97,6 +99,12 @@ fn run<M: Method>(
 }
 impl Stage for Dof {
     type Fixed = Blurred;
+
+    fn recycle(&self, b: Blurred, pool: &Pool) {
+        if let MethodPlan::Layered(plan) = b.plan {
+            pool.give(plan.index);
+        }
+    }
 
     fn id(&self) -> StageId {
         StageId::Dof
@@ -198,8 +206,8 @@ impl Stage for Dof {
         facts.note("object_pixels_in_focus", in_focus);
         let next = Frame {
             acc: out,
-            depth: frame.depth.clone(),
-            coverage: frame.coverage.clone(),
+            depth: cx.pool.copy(&frame.depth),
+            coverage: cx.pool.copy(&frame.coverage),
             ..*frame
         };
         taps.fixed.frame = Some(Arc::new(FrameTap {

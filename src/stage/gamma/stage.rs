@@ -83,7 +83,7 @@ impl Stage for Gamma {
             let f = hw.dither.frac_bits;
             let lut = reduced_lut(&spec, acc_bits, f);
             let addr = &taps.fixed.pixels().codes;
-            let mut codes = vec![0u32; addr.len()];
+            let mut codes = cx.pool.filled(addr.len(), 0u32);
             lookup(&lut.table, addr, 0, &mut codes);
             facts.note("monotone", lut.is_monotone());
             (Lut::Reduced(Arc::new(lut), f), codes, 0)
@@ -93,7 +93,7 @@ impl Stage for Gamma {
             match &frame.coding {
                 FrameCoding::Log(add) => {
                     let lut = log_gamma_lut(add, &spec);
-                    let mut codes = vec![0u32; acc.len()];
+                    let mut codes = cx.pool.filled(acc.len(), 0u32);
                     lookup(&lut, acc, 0, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("log_input_eq15", true);
@@ -102,7 +102,7 @@ impl Stage for Gamma {
                 FrameCoding::Linear if dither_after => {
                     let f = hw.dither.frac_bits;
                     let lut = extended_lut(&spec, acc_bits, f);
-                    let mut codes = vec![0u32; acc.len()];
+                    let mut codes = cx.pool.filled(acc.len(), 0u32);
                     lookup(&lut, acc, frac, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
@@ -110,7 +110,7 @@ impl Stage for Gamma {
                 }
                 FrameCoding::Linear => {
                     let lut = GammaLut::build(&spec, acc_bits);
-                    let mut codes = vec![0u32; acc.len()];
+                    let mut codes = cx.pool.filled(acc.len(), 0u32);
                     lut.apply_u32(acc, frac, &mut codes);
                     facts.note("monotone", lut.is_monotone());
                     let unreachable = lut.unreachable_codes();

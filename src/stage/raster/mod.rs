@@ -142,9 +142,10 @@ impl Stage for Raster {
         let setups = taps.fixed.setups();
         let mut w = RasterWork::default();
         let mut out = Frags {
-            data: Vec::new(),
-            start: vec![0],
+            data: cx.pool.take(0),
+            start: cx.pool.take(setups.len() + 1),
         };
+        out.start.push(0);
         let mut stepped = Vec::with_capacity(setups.len());
         // A banded run's later bands do not count the walk above their rows again.
         let above = cx.layout.band.is_none_or(|b| b.first);
