@@ -154,8 +154,9 @@ impl Pool {
         }
         for a in frags {
             if let Ok(f) = Arc::try_unwrap(a) {
-                self.give(f.data);
-                self.give(f.start);
+                // Kept whole: the next frame's raster tasks take their parts back in order.
+                self.give(f.parts);
+                self.give(f.spans);
             }
         }
         for a in samples {

@@ -195,20 +195,54 @@ pub fn processing_order(is_point: impl Fn(usize) -> bool, n: usize) -> Vec<usize
     order
 }
 
-/// Per-primitive fragment lists (primitive `p`'s are `data[start[p]..start[p + 1]]`), in the
-/// order the raster emitted them.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Per-primitive fragment lists, in the order the raster emitted them, held in parts of
+/// consecutive primitives (one per raster task; a float raster writes one part). Two lists
+/// are equal when every primitive's fragments are, however they are split into parts.
+#[derive(Clone, Debug, Default)]
 pub struct Frags<T> {
-    /// All fragments.
-    pub data: Vec<T>,
-    /// Offsets, one per primitive plus one.
-    pub start: Vec<usize>,
+    /// The fragments, part by part.
+    pub parts: Vec<Vec<T>>,
+    /// Per primitive: its part and the range of its fragments in it.
+    pub spans: Vec<(u32, usize, usize)>,
 }
 
 impl<T> Frags<T> {
+    /// One part holding the lists emitted by `emit(p, out)` for every primitive `p < n`, in
+    /// order.
+    pub fn one_part(n: usize, data: Vec<T>, mut emit: impl FnMut(usize, &mut Vec<T>)) -> Self {
+        let mut data = data;
+        let mut spans = Vec::with_capacity(n);
+        for p in 0..n {
+            let a = data.len();
+            emit(p, &mut data);
+            spans.push((0, a, data.len()));
+        }
+        Self {
+            parts: vec![data],
+            spans,
+        }
+    }
+
     /// Primitive `p`'s fragments.
     pub fn of(&self, p: usize) -> &[T] {
-        &self.data[self.start[p]..self.start[p + 1]]
+        let (k, a, b) = self.spans[p];
+        &self.parts[k as usize][a..b]
+    }
+
+    /// Fragments of all primitives.
+    pub fn len(&self) -> usize {
+        self.parts.iter().map(Vec::len).sum()
+    }
+
+    /// Whether no primitive has a fragment.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl<T: PartialEq> PartialEq for Frags<T> {
+    fn eq(&self, o: &Self) -> bool {
+        self.spans.len() == o.spans.len() && (0..self.spans.len()).all(|p| self.of(p) == o.of(p))
     }
 }
 

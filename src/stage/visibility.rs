@@ -17,6 +17,7 @@ use crate::config::HwConfig;
 use crate::error::Result;
 use crate::fixed::{Quant, SignalStats, round_shift_i64};
 use crate::scene::Scene;
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Primitive id of the background (samples no surface covered).
@@ -170,30 +171,65 @@ pub struct VisWork {
     pub clamped: u64,
 }
 
-/// Depth-tests the fragments of surface `prim` into the buffer: channel 0's intensity into
-/// `buf.i`, channel `c + 1`'s into `extra[c]` (a colour render's other channels).
-pub fn resolve(
-    frags: &[Frag],
-    prim: u32,
-    zc: &ZConvert,
-    buf: &mut Samples,
-    extra: &mut [Vec<u32>],
-    w: &mut VisWork,
-) {
+/// One part of the sample buffer: the planes of the rows from sample `s0` on (depth,
+/// primitive id, channel 0's intensity, the other channels' intensities).
+pub struct Part<'a> {
+    s0: usize,
+    z: &'a mut [u32],
+    prim: &'a mut [u32],
+    i: &'a mut [u32],
+    extra: Vec<&'a mut [u32]>,
+}
+
+/// Splits the buffer (and the other channels' intensity planes `extra`) into `n` parts of
+/// whole rows, top to bottom.
+pub fn parts<'a>(buf: &'a mut Samples, extra: &'a mut [Vec<u32>], n: usize) -> Vec<Part<'a>> {
+    let width = buf.reg.width().max(1);
+    let rows = buf.z.len() / width;
+    let step = rows.div_ceil(n.max(1)).max(1) * width;
+    let mut z = buf.z.chunks_mut(step);
+    let mut prim = buf.prim.chunks_mut(step);
+    let mut i = buf.i.chunks_mut(step);
+    let mut more: Vec<_> = extra.iter_mut().map(|e| e.chunks_mut(step)).collect();
+    let mut out = Vec::new();
+    while let (Some(z), Some(prim), Some(i)) = (z.next(), prim.next(), i.next()) {
+        let extra = more
+            .iter_mut()
+            .map(|m| m.next().expect("same length"))
+            .collect();
+        out.push(Part {
+            s0: out.len() * step,
+            z,
+            prim,
+            i,
+            extra,
+        });
+    }
+    out
+}
+
+/// Depth-tests the fragments of surface `prim` that fall in `part` into it (channel 0's
+/// intensity into `i`, channel `c + 1`'s into `extra[c]`); counts the writes and clamps of
+/// those fragments (the tests are the fragments, counted by the caller). The parts of a
+/// buffer see every fragment in the same order, so any split gives the whole buffer's
+/// result.
+pub fn resolve(frags: &[Frag], prim: u32, zc: &ZConvert, part: &mut Part, w: &mut VisWork) {
+    let (s0, n) = (part.s0, part.z.len());
     for f in frags {
-        let s = f.s as usize;
+        let Some(s) = (f.s as usize).checked_sub(s0).filter(|&s| s < n) else {
+            continue;
+        };
         let z = zc.apply(f.z, &mut w.clamped);
-        if z < buf.z[s] {
-            buf.z[s] = z;
-            buf.prim[s] = prim;
-            buf.i[s] = f.i[0];
-            for (c, plane) in extra.iter_mut().enumerate() {
+        if z < part.z[s] {
+            part.z[s] = z;
+            part.prim[s] = prim;
+            part.i[s] = f.i[0];
+            for (c, plane) in part.extra.iter_mut().enumerate() {
                 plane[s] = f.i[c + 1];
             }
             w.writes += 1;
         }
     }
-    w.tests += frags.len() as u64;
 }
 
 /// Visible samples of a light point (tested, not written).
@@ -347,14 +383,33 @@ impl Stage for Visibility {
             .map(|c| cx.pool.filled(reg.len(), prims.bg[c]))
             .collect();
         let n = prims.q.len();
-        let mut tests = vec![0u64; n];
-        for (p, q) in prims.q.iter().enumerate() {
-            if matches!(q, QPrim::Point { .. }) {
-                continue;
-            }
-            let before = w.tests;
-            resolve(frags.of(p), p as u32 + 1, &zc, &mut buf, &mut extra, &mut w);
-            tests[p] = w.tests - before;
+        let surface = |p: usize| !matches!(prims.q[p], QPrim::Point { .. });
+        let mut tests: Vec<u64> = (0..n)
+            .map(|p| {
+                if surface(p) {
+                    frags.of(p).len() as u64
+                } else {
+                    0
+                }
+            })
+            .collect();
+        w.tests = tests.iter().sum();
+        // Each thread owns whole rows of the buffer and resolves every surface's fragments
+        // in them, in primitive order; the counts are integers summed in part order.
+        let threads = rayon::current_num_threads().max(1);
+        let done: Vec<VisWork> = parts(&mut buf, &mut extra, threads)
+            .into_par_iter()
+            .map(|mut part| {
+                let mut wk = VisWork::default();
+                for p in (0..n).filter(|&p| surface(p)) {
+                    resolve(frags.of(p), p as u32 + 1, &zc, &mut part, &mut wk);
+                }
+                wk
+            })
+            .collect();
+        for wk in done {
+            w.writes += wk.writes;
+            w.clamped += wk.clamped;
         }
         let i_max: Vec<i64> = (0..channels)
             .map(|c| {

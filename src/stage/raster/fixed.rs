@@ -28,6 +28,18 @@ pub struct RasterWork {
     pub clamped: u64,
 }
 
+impl RasterWork {
+    /// Adds the counts of `o`.
+    pub fn add(&mut self, o: &Self) {
+        self.spans += o.spans;
+        self.samples += o.samples;
+        self.walked += o.walked;
+        self.rows_walked += o.rows_walked;
+        self.reseeds += o.reseeds;
+        self.clamped += o.clamped;
+    }
+}
+
 /// Fixed parameters of the raster.
 #[derive(Clone, Copy, Debug)]
 pub struct RasterParams {

@@ -23,6 +23,7 @@ use crate::config::HwConfig;
 use crate::error::Result;
 use crate::fixed::SignalStats;
 use crate::scene::Scene;
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// One covered sample of one primitive: buffer index, depth and intensity codes.
@@ -72,15 +73,9 @@ pub fn float_frags(
     reg: &SampleRegion,
     capacity: usize,
 ) -> Frags<FragF> {
-    let mut out = Frags {
-        data: Vec::with_capacity(capacity),
-        start: vec![0],
-    };
-    for p in prims {
-        raster_f64(p, grid, reg, &mut out.data);
-        out.start.push(out.data.len());
-    }
-    out
+    Frags::one_part(prims.len(), Vec::with_capacity(capacity), |p, out| {
+        raster_f64(&prims[p], grid, reg, out)
+    })
 }
 
 /// Merges two fragment lists sorted by sample index: coverage mismatches and attribute errors.
@@ -141,19 +136,48 @@ impl Stage for Raster {
         let reg = cx.layout.samples;
         let setups = taps.fixed.setups();
         let mut w = RasterWork::default();
-        let mut out = Frags {
-            data: cx.pool.take(0),
-            start: cx.pool.take(setups.len() + 1),
-        };
-        out.start.push(0);
-        let mut stepped = Vec::with_capacity(setups.len());
         // A banded run's later bands do not count the walk above their rows again.
         let above = cx.layout.band.is_none_or(|b| b.first);
-        for s in setups {
-            let before = w.samples + w.walked;
-            raster_rows(s, &p, &reg, above, &mut out.data, &mut w);
-            out.start.push(out.data.len());
-            stepped.push(w.samples + w.walked - before);
+        // Parts of consecutive primitives, one task each (the fragments, counts and tokens
+        // are those of one pass in primitive order: integers, concatenated in part order).
+        let tasks = 4 * rayon::current_num_threads().max(1);
+        let chunk = if setups.len() < 64 * tasks {
+            setups.len().max(1)
+        } else {
+            setups.len().div_ceil(tasks)
+        };
+        // Last frame's parts, whose sizes fit the same scene's.
+        let mut bufs: Vec<Vec<Frag>> = cx.pool.reuse();
+        bufs.resize_with(setups.len().div_ceil(chunk).max(1), Vec::new);
+        let done: Vec<_> = setups
+            .par_chunks(chunk)
+            .zip(bufs.par_iter_mut())
+            .map(|(ss, data)| {
+                let mut data = std::mem::take(data);
+                data.clear();
+                let mut w = RasterWork::default();
+                let mut spans = Vec::with_capacity(ss.len());
+                let mut stepped = Vec::with_capacity(ss.len());
+                for s in ss {
+                    let (a, before) = (data.len(), w.samples + w.walked);
+                    raster_rows(s, &p, &reg, above, &mut data, &mut w);
+                    spans.push((a, data.len()));
+                    stepped.push(w.samples + w.walked - before);
+                }
+                (data, spans, stepped, w)
+            })
+            .collect();
+        let mut out = Frags {
+            parts: Vec::with_capacity(done.len()),
+            spans: Vec::with_capacity(setups.len()),
+        };
+        let mut stepped = Vec::with_capacity(setups.len());
+        for (k, (data, spans, st, wk)) in done.into_iter().enumerate() {
+            out.parts.push(data);
+            out.spans
+                .extend(spans.into_iter().map(|(a, b)| (k as u32, a, b)));
+            stepped.extend(st);
+            w.add(&wk);
         }
         let prims = &taps.fixed.prims().q;
         let order = processing_order(|i| matches!(prims[i], QPrim::Point { .. }), prims.len());
@@ -178,7 +202,7 @@ impl Stage for Raster {
     fn float(&self, cx: &Cx, _: &Vec<u64>, taps: &mut Taps, _: &mut Notes) -> Result<()> {
         let (grid, reg) = (cx.layout.grid, cx.layout.samples);
         // About as many fragments as the fixed raster emitted.
-        let capacity = taps.fixed.frags.as_ref().map_or(0, |f| f.data.len());
+        let capacity = taps.fixed.frags.as_ref().map_or(0, |f| f.len());
         let out = float_frags(&taps.float.prims().f, &grid, &reg, capacity);
         taps.float.frags = Some(Arc::new(out));
         Ok(())
