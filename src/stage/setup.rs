@@ -22,6 +22,7 @@ use super::{
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::scene::Scene;
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Floor division of integers.
@@ -243,6 +244,25 @@ pub struct SetupWork {
     pub points: u64,
 }
 
+impl SetupWork {
+    /// Counts primitive `p` set up as `s`, as [`setup`] does.
+    pub fn tally(&mut self, p: &QPrim, s: &Setup) {
+        let dead = matches!(s, Setup::Degenerate);
+        match p {
+            QPrim::Triangle(_) => {
+                self.triangles += 1;
+                self.degenerate += u64::from(dead);
+            }
+            QPrim::Line { .. } => {
+                self.lines += 1;
+                self.triangles += 2;
+                self.degenerate += 2 * u64::from(dead);
+            }
+            QPrim::Point { .. } => self.points += 1,
+        }
+    }
+}
+
 /// Sets up a triangle; `None` for zero area.
 pub fn triangle(v: &[QVertex; 3], g: &Grid) -> Option<TriSetup> {
     let mut s = *v;
@@ -370,8 +390,18 @@ impl Stage for SetupStage {
     fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(usize, Facts)> {
         let mut w = SetupWork::default();
         let prims = &taps.fixed.prims().q;
+        // On every core, straight into the pooled list; the counts follow from each
+        // primitive and its setup (integers, the same on any thread count).
         let mut setups: Vec<Setup> = cx.pool.take(prims.len());
-        setups.extend(prims.iter().map(|p| setup(p, &cx.layout.grid, &mut w)));
+        let g = &cx.layout.grid;
+        setups.par_extend(
+            prims
+                .par_iter()
+                .map(|p| setup(p, g, &mut SetupWork::default())),
+        );
+        for (p, s) in prims.iter().zip(&setups) {
+            w.tally(p, s);
+        }
         let n = setups.len();
         taps.fixed.setups = Some(Arc::new(setups));
         let facts = Facts {
@@ -426,6 +456,43 @@ impl Stage for SetupStage {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tally_counts_as_setup_does() {
+        let g = Grid::new(4, 4, 64, 64);
+        let v = |x: i64, y: i64| QVertex {
+            x,
+            y,
+            z: 5,
+            i: [3, 0, 0],
+        };
+        let prims = [
+            QPrim::Triangle([v(0, 0), v(300, 20), v(40, 500)]),
+            QPrim::Triangle([v(0, 0), v(100, 100), v(200, 200)]),
+            QPrim::Line {
+                a: v(10, 10),
+                b: v(400, 90),
+                width: 16,
+            },
+            QPrim::Line {
+                a: v(10, 10),
+                b: v(10, 10),
+                width: 16,
+            },
+            QPrim::Point {
+                v: v(99, 99),
+                size: 8,
+            },
+        ];
+        let (mut by_setup, mut by_tally) = (SetupWork::default(), SetupWork::default());
+        for p in &prims {
+            let s = setup(p, &g, &mut by_setup);
+            by_tally.tally(p, &s);
+        }
+        let c = |w: SetupWork| (w.triangles, w.degenerate, w.lines, w.points);
+        assert_eq!(c(by_setup), (6, 3, 2, 1));
+        assert_eq!(c(by_tally), c(by_setup));
+    }
 
     #[test]
     fn edge_walk_matches_exact_ceiling_on_every_row() {
