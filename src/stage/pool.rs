@@ -156,7 +156,6 @@ impl Pool {
             if let Ok(f) = Arc::try_unwrap(a) {
                 // Kept whole: the next frame's raster tasks take their parts back in order.
                 self.give(f.parts);
-                self.give(f.spans);
             }
         }
         for a in samples {
