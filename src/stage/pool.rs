@@ -1,6 +1,6 @@
-//! The frame pool: the planes of the taps (set-up primitives, fragment lists, sample buffers, frame memories,
-//! pixel codes, the depth-of-field's layer planes), kept across the frames of a run so that
-//! the second frame allocates no frame-sized buffer. A buffer taken from the pool has the
+//! The frame pool: the planes of the taps (primitive lists, setups, fragment lists, sample
+//! buffers, frame memories, pixel codes, the depth-of-field's layer planes), kept across the
+//! frames of a run so that the second frame allocates no frame-sized buffer. A buffer taken from the pool has the
 //! length asked for and every element set, exactly as a fresh `vec![v; n]`, so a run's
 //! result never depends on what the pool held; only its allocations and page faults do.
 //!
