@@ -4,7 +4,7 @@
 //! the commit. The host front end uses f64 trigonometry and the LUTs `powf`: the hashes are
 //! those of x86_64 Linux with this toolchain (the CI machine).
 
-use igemu::config::{HwConfig, SigmaForm};
+use igemu::config::{AlphaNorm, HwConfig, SigmaForm};
 use igemu::pipeline::render;
 use igemu::scene::Scene;
 use igemu::stage::RunOptions;
@@ -45,19 +45,37 @@ fn default_pinhole_linear12() {
 }
 
 /// The paper's blur formula (`dof.sigma = "paper"`, the default since it replaced the
-/// affine form): the background blurs at K/U = 3.956 px instead of 3.35.
+/// affine form): the background blurs at K/U = 3.956 px instead of 3.35. Since
+/// `dof.alpha_norm = "behind"` became the default (no seams where the cone crosses layers,
+/// docs/dof.md "Seams"), the codes differ from the plain composite's along layer boundaries.
 #[test]
 fn default_linear12_with_depth_of_field() {
-    check("default", "linear12", 0x88fa_2770_d7b0_81bc);
+    check("default", "linear12", 0x5135_5ee2_f9ec_3b52);
 }
 
-/// The first version's affine blur form keeps the first version's DAC codes.
+/// The plain back-to-front composite (`dof.alpha_norm = "image"`) keeps the DAC codes it
+/// had before the behind normalisation existed.
+#[test]
+fn default_linear12_with_depth_of_field_image_alpha() {
+    check_with(
+        "default",
+        "linear12",
+        |h| h.dof.alpha_norm = AlphaNorm::Image,
+        0x88fa_2770_d7b0_81bc,
+    );
+}
+
+/// The first version's affine blur form with the plain composite keeps the first version's
+/// DAC codes.
 #[test]
 fn default_linear12_with_depth_of_field_affine_sigma() {
     check_with(
         "default",
         "linear12",
-        |h| h.dof.sigma = SigmaForm::Affine,
+        |h| {
+            h.dof.sigma = SigmaForm::Affine;
+            h.dof.alpha_norm = AlphaNorm::Image;
+        },
         0x4357_099f_3035_4706,
     );
 }
@@ -70,5 +88,16 @@ fn default_pinhole_log8_logadd() {
 /// Focus on the cone (the paper's Fig. 3c), the paper's blur.
 #[test]
 fn cone_focus_linear12_with_depth_of_field() {
-    check("cone-focus", "linear12", 0xaf85_9917_b6e8_1ddf);
+    check("cone-focus", "linear12", 0x0bee_d7ee_cff4_d176);
+}
+
+/// The same with the plain composite: the codes from before the behind normalisation.
+#[test]
+fn cone_focus_linear12_with_depth_of_field_image_alpha() {
+    check_with(
+        "cone-focus",
+        "linear12",
+        |h| h.dof.alpha_norm = AlphaNorm::Image,
+        0xaf85_9917_b6e8_1ddf,
+    );
 }

@@ -6,14 +6,17 @@
 //   h_*: horizontal pass, image plane -> line buffer (saturated to H_OUT_BITS = dof.line_bits)
 //   v_*: vertical pass, line buffer -> accumulator (saturated to V_OUT_BITS = dof.acc_bits)
 // Each pass takes a window of TAPS = 2 HALF + 1 samples of the colour plane (x, premultiplied
-// intensity) and of the alpha plane (a, coverage share); window sample t sits at line
+// intensity), of the alpha plane (a, coverage share) and of the behind plane (d, the share of
+// the layer and every layer behind it: the alpha's normaliser with dof.alpha_norm = "behind",
+// the pixel's whole share with "image"); window sample t sits at line
 // position pos + t - HALF. Taps outside the line (not 0 <= pos + t - HALF < len) are gated
 // to zero whatever their inputs hold (the zero padding of the image border). Outputs:
 //   sx  = min(sum c_t x_t, 2^OUT_BITS - 1), ovf = the sum did not fit (the Rust model counts
 //         it; with dof.overflow = ERROR it stops the run),
 //   sa  = sum c_t a_t (exact: SA_BITS = A_BITS + f, the taps sum to 2^f),
+//   sd  = sum c_t d_t (exact, as sa): after both passes the alpha is A / D,
 //   w   = sum of c_t over the in-line taps: the border renormalisation weight (Wx or Wy of
-//         the alpha normalisation a = A / (n^2 Wx Wy)).
+//         alpha normalisation a = A / (n^2 Wx Wy) of dof.alpha_norm = "image").
 // Timing: tap-parallel (TAPS multipliers per plane and pass, adder tree), combinational up
 // to the output registers: latency 1 clock, one output sample per pass per clock.
 module dof_mac_1d #(
@@ -31,9 +34,11 @@ module dof_mac_1d #(
     input  wire [POS_BITS-1:0]          len,
     input  wire [(2*HALF+1)*X_BITS-1:0] x,
     input  wire [(2*HALF+1)*A_BITS-1:0] a,
+    input  wire [(2*HALF+1)*A_BITS-1:0] d,
     output reg  [OUT_BITS-1:0]          sx,
     output reg                          ovf,
     output reg  [SA_BITS-1:0]           sa,
+    output reg  [SA_BITS-1:0]           sd,
     output reg  [C_BITS-1:0]            w
 );
     localparam TAPS = 2 * HALF + 1;
@@ -42,16 +47,19 @@ module dof_mac_1d #(
     localparam [S_BITS-1:0] MAX = {{(S_BITS-OUT_BITS){1'b0}}, {OUT_BITS{1'b1}}};
     reg [S_BITS-1:0]  sum_x;
     reg [SA_BITS-1:0] sum_a;
+    reg [SA_BITS-1:0] sum_d;
     reg [C_BITS-1:0]  sum_w;
     integer t;
     always @* begin
         sum_x = 0;
         sum_a = 0;
+        sum_d = 0;
         sum_w = 0;
         for (t = 0; t < TAPS; t = t + 1) begin
             if (pos + t >= HALF && pos + t < len + HALF) begin
                 sum_x = sum_x + x[t*X_BITS +: X_BITS] * coef[t*C_BITS +: C_BITS];
                 sum_a = sum_a + a[t*A_BITS +: A_BITS] * coef[t*C_BITS +: C_BITS];
+                sum_d = sum_d + d[t*A_BITS +: A_BITS] * coef[t*C_BITS +: C_BITS];
                 sum_w = sum_w + coef[t*C_BITS +: C_BITS];
             end
         end
@@ -60,6 +68,7 @@ module dof_mac_1d #(
         ovf <= sum_x > MAX;
         sx  <= (sum_x > MAX) ? {OUT_BITS{1'b1}} : sum_x[OUT_BITS-1:0];
         sa  <= sum_a;
+        sd  <= sum_d;
         w   <= sum_w;
     end
 endmodule
@@ -86,18 +95,22 @@ module dof_row_mac #(
     input  wire [POS_BITS-1:0]           h_len,
     input  wire [(2*HALF+1)*HX_BITS-1:0] h_x,
     input  wire [(2*HALF+1)*HA_BITS-1:0] h_a,
+    input  wire [(2*HALF+1)*HA_BITS-1:0] h_d,
     output wire [H_OUT_BITS-1:0]         h_sx,
     output wire                          h_ovf,
     output wire [H_SA_BITS-1:0]          h_sa,
+    output wire [H_SA_BITS-1:0]          h_sd,
     output wire [C_BITS-1:0]             h_w,
     input  wire [LAYER_BITS-1:0]         v_layer,
     input  wire [POS_BITS-1:0]           v_pos,
     input  wire [POS_BITS-1:0]           v_len,
     input  wire [(2*HALF+1)*VX_BITS-1:0] v_x,
     input  wire [(2*HALF+1)*VA_BITS-1:0] v_a,
+    input  wire [(2*HALF+1)*VA_BITS-1:0] v_d,
     output wire [V_OUT_BITS-1:0]         v_sx,
     output wire                          v_ovf,
     output wire [V_SA_BITS-1:0]          v_sa,
+    output wire [V_SA_BITS-1:0]          v_sd,
     output wire [C_BITS-1:0]             v_w
 );
     localparam TAPS = 2 * HALF + 1;
@@ -115,9 +128,9 @@ module dof_row_mac #(
     dof_mac_1d #(.HALF(HALF), .C_BITS(C_BITS), .POS_BITS(POS_BITS), .X_BITS(HX_BITS),
                  .A_BITS(HA_BITS), .OUT_BITS(H_OUT_BITS), .SA_BITS(H_SA_BITS))
         u_h (.clk(clk), .coef(h_coef), .pos(h_pos), .len(h_len), .x(h_x), .a(h_a),
-             .sx(h_sx), .ovf(h_ovf), .sa(h_sa), .w(h_w));
+             .d(h_d), .sx(h_sx), .ovf(h_ovf), .sa(h_sa), .sd(h_sd), .w(h_w));
     dof_mac_1d #(.HALF(HALF), .C_BITS(C_BITS), .POS_BITS(POS_BITS), .X_BITS(VX_BITS),
                  .A_BITS(VA_BITS), .OUT_BITS(V_OUT_BITS), .SA_BITS(V_SA_BITS))
         u_v (.clk(clk), .coef(v_coef), .pos(v_pos), .len(v_len), .x(v_x), .a(v_a),
-             .sx(v_sx), .ovf(v_ovf), .sa(v_sa), .w(v_w));
+             .d(v_d), .sx(v_sx), .ovf(v_ovf), .sa(v_sa), .sd(v_sd), .w(v_w));
 endmodule

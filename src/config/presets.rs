@@ -2,8 +2,9 @@
 //! 8-bit linear accumulators, and 8- or 7-bit log codes with potentiation or log arithmetic.
 
 use super::{
-    AccumulateCfg, CodingCfg, CyclesCfg, DitherCfg, DofCfg, DofKernel, DofKind, DownsampleCfg,
-    FilterKind, GammaCfg, HwConfig, InputCfg, LuminanceCfg, RasterCfg, SigmaForm, VisibilityCfg,
+    AccumulateCfg, AlphaNorm, CodingCfg, CyclesCfg, DitherCfg, DofCfg, DofKernel, DofKind,
+    DownsampleCfg, FilterKind, GammaCfg, HwConfig, InputCfg, LuminanceCfg, RasterCfg, SigmaForm,
+    VisibilityCfg,
 };
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
 
@@ -69,6 +70,7 @@ pub fn preset(name: &str) -> Option<HwConfig> {
             k: 0.05,
             coef_bits: 12,
             alpha_bits: 12,
+            alpha_norm: AlphaNorm::Behind,
             guard_bits: 4,
             // x * coverage ((2^acc - 1) * 16 < 2^(acc + 4) for 4x4 samples) times the 2^12 tap sum.
             line_bits: acc_bits + 4 + 12,

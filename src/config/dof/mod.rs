@@ -98,6 +98,34 @@ impl SigmaForm {
     }
 }
 
+/// What a layer's compositing alpha is normalised by (`dof.alpha_norm`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AlphaNorm {
+    /// By the blurred coverage of the layer and every layer behind it (docs/dof.md,
+    /// "Seams"): where a surface crosses from one layer into a nearer one, the two blurred
+    /// masks add up to one and nothing behind shows through; a third plane through the
+    /// passes.
+    Behind,
+    /// By the in-image tap sum (the border renormalisation only): the plain back-to-front
+    /// composite, which lets the background show through as a dark seam wherever a
+    /// surface crosses a layer boundary.
+    Image,
+}
+
+impl AlphaNorm {
+    /// Every choice.
+    pub const ALL: [AlphaNorm; 2] = [AlphaNorm::Behind, AlphaNorm::Image];
+
+    /// The name in a hardware file.
+    pub fn name(self) -> &'static str {
+        match self {
+            AlphaNorm::Behind => "behind",
+            AlphaNorm::Image => "image",
+        }
+    }
+}
+
 /// `dof.sigma_rom_bits`: depth-code bits that index the sigma ROM (`2^bits + 1` entries
 /// plus one for infinity).
 pub const SIGMA_ROM_BITS: std::ops::RangeInclusive<u32> = 4..=16;
@@ -134,6 +162,8 @@ pub struct DofCfg {
     pub coef_bits: u32,
     /// Fraction bits of the compositing alpha.
     pub alpha_bits: u32,
+    /// What the compositing alpha is normalised by.
+    pub alpha_norm: AlphaNorm,
     /// Guard fraction bits of the layer colour and the composite.
     pub guard_bits: u32,
     /// Width of the line-buffer word (horizontal-pass sum of `x * m`).
@@ -247,6 +277,7 @@ pub(crate) struct RawDof {
     k: Option<f64>,
     coef_bits: Option<u32>,
     alpha_bits: Option<u32>,
+    alpha_norm: Option<AlphaNorm>,
     guard_bits: Option<u32>,
     line_bits: Option<u32>,
     acc_bits: Option<u32>,
@@ -269,6 +300,7 @@ impl RawDof {
         set(&mut c.k, self.k);
         set(&mut c.coef_bits, self.coef_bits);
         set(&mut c.alpha_bits, self.alpha_bits);
+        set(&mut c.alpha_norm, self.alpha_norm);
         set(&mut c.guard_bits, self.guard_bits);
         set(&mut c.line_bits, self.line_bits);
         set(&mut c.acc_bits, self.acc_bits);

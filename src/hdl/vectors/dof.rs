@@ -4,8 +4,9 @@
 //!
 //! Vector fields (`TAPS = 2 HALF + 1`, `HALF` the largest mask half-size of the scene's
 //! layers): `pass` (0 horizontal, 1 vertical), `layer`, `pos`, `len`, `TAPS` colour samples
-//! `x`, `TAPS` alpha samples `a`, then the expected `sx` (saturated colour sum), `ovf`,
-//! `sa` (alpha sum) and `w` (in-line tap sum, the border renormalisation weight). Window
+//! `x`, `TAPS` alpha samples `a`, `TAPS` behind samples `d`, then the expected `sx`
+//! (saturated colour sum), `ovf`, `sa` (alpha sum), `sd` (behind sum, the alpha's
+//! normaliser) and `w` (in-line tap sum, the border renormalisation weight). Window
 //! sample `t` sits at line position `pos + t - HALF`; samples off the line hold random
 //! values the module must ignore.
 
@@ -16,7 +17,8 @@ use crate::hdl::bench::{Bench, Rng};
 use crate::scene::Lens;
 use crate::stage::StageId;
 use crate::stage::dof::{
-    DepthImage, LayerPlanes, LensMap, border_sum, layered_fixed_observed, plan_layers, row_mac,
+    DepthImage, LayerPlanes, LensMap, MacOut, border_sum, layered_fixed_observed, plan_layers,
+    row_mac,
 };
 use std::hint::black_box;
 use std::time::Instant;
@@ -24,6 +26,11 @@ use std::time::Instant;
 /// Bits to hold `v`.
 fn bits(v: u128) -> u32 {
     (128 - v.leading_zeros()).max(1)
+}
+
+/// A vector's expected outputs: `sx`, `ovf`, `sa`, `sd`, `w`.
+fn expected(r: &MacOut, w: u64) -> [u64; 5] {
+    [r.x as u64, r.overflow as u64, r.a as u64, r.d as u64, w]
 }
 
 /// Fills `b` with the dof row MAC's parameters, coefficient ROM and vectors.
@@ -108,7 +115,8 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
     b.fields = ["pass", "layer", "pos", "len"].to_vec();
     b.fields.extend(std::iter::repeat_n("x", taps));
     b.fields.extend(std::iter::repeat_n("a", taps));
-    b.fields.extend(["sx", "ovf", "sa", "w"]);
+    b.fields.extend(std::iter::repeat_n("d", taps));
+    b.fields.extend(["sx", "ovf", "sa", "sd", "w"]);
     let in_bits = |pass: u64| {
         if pass == 0 {
             (hx_bits, ha_bits)
@@ -117,21 +125,17 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
         }
     };
     // The Rust model of one vector: the layer's own taps over the window.
-    let one = |v: &[u64]| -> [u64; 4] {
+    let one = |v: &[u64]| -> [u64; 5] {
         let (pass, c) = (v[0], &plan.layers[v[1] as usize].coef);
         let (pos, len) = (v[2] as usize, v[3] as usize);
-        let (xs, as_) = (&v[4..4 + taps], &v[4 + taps..4 + 2 * taps]);
+        let plane = |k: usize| &v[4 + k * taps..4 + (k + 1) * taps];
         let at = |i: usize| i + half - pos;
         let max = if pass == 0 { line_max } else { acc_max };
         let r = row_mac(c, pos, len, max, |i| {
-            (xs[at(i)] as u128, as_[at(i)] as u128)
+            let s = |k: usize| plane(k)[at(i)] as u128;
+            (s(0), s(1), s(2))
         });
-        [
-            r.x as u64,
-            r.overflow as u64,
-            r.a as u64,
-            border_sum(c, pos, len),
-        ]
+        expected(&r, border_sum(c, pos, len))
     };
     // A vector's inputs: samples on the line from `on(i)`, random values off it.
     let window = |rng: &mut Rng,
@@ -139,21 +143,23 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
                   l: usize,
                   pos: usize,
                   len: usize,
-                  on: &mut dyn FnMut(usize) -> (u64, u64)| {
+                  on: &mut dyn FnMut(usize) -> (u64, u64, u64)| {
         let (xb, ab) = in_bits(pass);
         let mut v = vec![pass, l as u64, pos as u64, len as u64];
-        let mut a = Vec::with_capacity(taps);
+        let (mut a, mut d) = (Vec::with_capacity(taps), Vec::with_capacity(taps));
         for t in 0..taps {
             let i = pos as i64 + t as i64 - half as i64;
-            let (x, y) = if i >= 0 && (i as usize) < len {
+            let (x, y, z) = if i >= 0 && (i as usize) < len {
                 on(i as usize)
             } else {
-                (rng.bits(xb), rng.bits(ab))
+                (rng.bits(xb), rng.bits(ab), rng.bits(ab))
             };
             v.push(x);
             a.push(y);
+            d.push(z);
         }
         v.extend(a);
+        v.extend(d);
         v
     };
     // Scene taps: output samples of both passes spread over every blurred layer's box, the
@@ -177,42 +183,34 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
                 let (px, py) = (x + lp.x0, y + lp.y0);
                 let row = y * bw;
                 let r = row_mac(c, x, bw, line_max, |i| {
-                    (lp.xi[row + i] as u128, lp.ai[row + i] as u128)
+                    let j = row + i;
+                    (lp.xi[j] as u128, lp.ai[j] as u128, lp.di[j] as u128)
                 });
-                let mut inb = |i: usize| -> (u64, u64) {
+                let mut inb = |i: usize| -> (u64, u64, u64) {
                     if (lp.x0..lp.x0 + bw).contains(&i) {
                         let j = row + i - lp.x0;
-                        (lp.xi[j], lp.ai[j])
+                        (lp.xi[j], lp.ai[j], lp.di[j])
                     } else {
-                        (0, 0)
+                        (0, 0, 0)
                     }
                 };
                 let mut v = window(rng, 0, lp.layer, px, w, &mut inb);
-                v.extend([
-                    r.x as u64,
-                    r.overflow as u64,
-                    r.a as u64,
-                    border_sum(c, px, w),
-                ]);
+                v.extend(expected(&r, border_sum(c, px, w)));
                 scene_v.push(v);
                 let r = row_mac(c, y, bh, acc_max, |i| {
-                    (lp.hx[i * bw + x] as u128, lp.ha[i * bw + x] as u128)
+                    let j = i * bw + x;
+                    (lp.hx[j] as u128, lp.ha[j] as u128, lp.hd[j] as u128)
                 });
-                let mut inb = |i: usize| -> (u64, u64) {
+                let mut inb = |i: usize| -> (u64, u64, u64) {
                     if (lp.y0..lp.y0 + bh).contains(&i) {
                         let j = (i - lp.y0) * bw + x;
-                        (lp.hx[j], lp.ha[j])
+                        (lp.hx[j], lp.ha[j], lp.hd[j])
                     } else {
-                        (0, 0)
+                        (0, 0, 0)
                     }
                 };
                 let mut v = window(rng, 1, lp.layer, py, h, &mut inb);
-                v.extend([
-                    r.x as u64,
-                    r.overflow as u64,
-                    r.a as u64,
-                    border_sum(c, py, h),
-                ]);
+                v.extend(expected(&r, border_sum(c, py, h)));
                 scene_v.push(v);
             }
         }
@@ -223,7 +221,7 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
     debug_assert!(
         scene_v
             .iter()
-            .all(|v| one(&v[..4 + 2 * taps])[..] == v[4 + 2 * taps..])
+            .all(|v| one(&v[..4 + 3 * taps])[..] == v[4 + 3 * taps..])
     );
     b.sources.push(("scene", scene_v.len()));
     b.vectors = scene_v;
@@ -251,9 +249,9 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
                     for fill in 0..3 {
                         let mut r2 = Rng::new(rng.next_u64());
                         let mut on = |_: usize| match fill {
-                            0 => (0, 0),
-                            1 => ((1u64 << xb) - 1, (1u64 << ab) - 1),
-                            _ => (r2.bits(xb), r2.bits(ab)),
+                            0 => (0, 0, 0),
+                            1 => ((1u64 << xb) - 1, (1u64 << ab) - 1, (1u64 << ab) - 1),
+                            _ => (r2.bits(xb), r2.bits(ab), r2.bits(ab)),
                         };
                         let v = window(rng, pass, l, pos, len, &mut on);
                         push(b, v);
@@ -276,14 +274,14 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
         let v = window(rng, pass, l, pos, len, &mut |_| {
             let x = r2.bits(xb);
             let x = if top { x | (1u64 << (xb - 1)) } else { x };
-            (x, r2.bits(ab))
+            (x, r2.bits(ab), r2.bits(ab))
         });
         push(b, v);
     }
     b.sources.push(("random", RANDOM));
     let t = Instant::now();
     for v in &b.vectors {
-        black_box(one(black_box(&v[..4 + 2 * taps])));
+        black_box(one(black_box(&v[..4 + 3 * taps])));
     }
     b.model_ns = t.elapsed().as_nanos() as u64;
     Ok(())

@@ -6,31 +6,32 @@
 //! band of 29-45 LSB where a blurred edge meets it, docs/dof-compare.md); clamped, a scene
 //! that continues past the border comes out as if it did.
 
-use super::fixed::{DofWork, composite, share, udiv};
+use super::fixed::{DofWork, composite, planes, share, udiv};
 use super::kernel::Mask2;
 use super::layers::{DepthImage, LayerPlan};
-use crate::config::DofCfg;
+use crate::config::{AlphaNorm, DofCfg};
 use crate::fixed::Overflow;
 use rayon::prelude::*;
 
-/// The layer's input planes over its box `(x0, y0, bw, bh)`: `(x m, m)` per pixel, in
-/// units of `1/n2` of a sample share (fixed codes: exact integers).
+/// The layer's input planes over its box `(x0, y0, bw, bh)`: `(x m, m, behind)` per pixel,
+/// in units of `1/n2` of a sample share (fixed codes: exact integers).
 fn input<T: Copy, O: Copy + Default>(
     img: &DepthImage<T>,
     plan: &LayerPlan,
     l: usize,
     (x0, y0, bw, bh): (usize, usize, usize, usize),
-    mul: impl Fn(T, u32) -> (O, O),
-) -> (Vec<O>, Vec<O>) {
-    let (mut xi, mut ai) = (vec![O::default(); bw * bh], vec![O::default(); bw * bh]);
+    mul: impl Fn(T, u32, u32) -> (O, O, O),
+) -> [Vec<O>; 3] {
+    let mut planes = [(); 3].map(|_| vec![O::default(); bw * bh]);
     for y in 0..bh {
         for x in 0..bw {
             let pi = (y + y0) * img.width + x + x0;
-            let s = share(plan, img.key[pi], img.cov[pi], plan.index[pi], l, img.n2);
-            (xi[y * bw + x], ai[y * bw + x]) = mul(img.value[pi], s);
+            let (s, d) = share(plan, img.key[pi], img.cov[pi], plan.index[pi], l, img.n2);
+            let i = y * bw + x;
+            (planes[0][i], planes[1][i], planes[2][i]) = mul(img.value[pi], s, d);
         }
     }
-    (xi, ai)
+    planes
 }
 
 /// Per window position `t` in `0..n + 2m` (box-local sample `t - m`): the box-local sample
@@ -66,13 +67,13 @@ pub(super) fn layer_fixed(
     let acc_max: u128 = (1u128 << p.acc_bits) - 1;
     let one_q = 1u128 << q;
     let n2 = u128::from(img.n2);
-    let (xi, ai) = input(img, plan, l, boxr, |v, s| {
-        (u64::from(v) * u64::from(s), u64::from(s))
+    let [xi, ai, di] = input(img, plan, l, boxr, |v, s, d| {
+        (u64::from(v) * u64::from(s), u64::from(s), u64::from(d))
     });
     let (m, side) = (mask.m, mask.side());
     let (cols, rows_at) = (tap_map(x0, bw, w, m), tap_map(y0, bh, h, m));
     // Clamped reads see a whole window everywhere: the border weight is the mask's sum.
-    let ws = u128::from(mask.w.iter().sum::<u64>()) * n2;
+    let whole = u128::from(mask.w.iter().sum::<u64>()) * n2;
     // The box's rows, in parallel; counts summed in row order (the same on any thread
     // count).
     let rows: Vec<(usize, &mut [u64], &mut [bool])> = out[y0 * w..(y0 + bh) * w]
@@ -86,15 +87,16 @@ pub(super) fn layer_fixed(
         .map(|(y, orow, drow)| {
             let mut wk = DofWork::default();
             for x in 0..bw {
-                let (mut sx, mut sa) = (0u128, 0u128);
+                let (mut sx, mut sa, mut sd) = (0u128, 0u128, 0u128);
                 for ty in 0..side {
                     let Some(r) = rows_at[y + ty] else { continue };
                     let wr = &mask.w[ty * side..(ty + 1) * side];
                     for (tx, &cv) in wr.iter().enumerate() {
                         let Some(c) = cols[x + tx] else { continue };
-                        let cv = u128::from(cv);
-                        sx += cv * u128::from(xi[r * bw + c]);
-                        sa += cv * u128::from(ai[r * bw + c]);
+                        let (cv, j) = (u128::from(cv), r * bw + c);
+                        sx += cv * u128::from(xi[j]);
+                        sa += cv * u128::from(ai[j]);
+                        sd += cv * u128::from(di[j]);
                     }
                 }
                 if sx > acc_max {
@@ -109,6 +111,10 @@ pub(super) fn layer_fixed(
                 }
                 wk.divides += 1;
                 let col = udiv(sx << (g + 1), sa).div_ceil(2);
+                let ws = match plan.alpha_norm {
+                    AlphaNorm::Behind => sd,
+                    AlphaNorm::Image => whole,
+                };
                 let aq = udiv(sa << (q + 1), ws).div_ceil(2).min(one_q);
                 let xo = x + x0;
                 composite(&mut orow[xo], &mut drow[xo], col, aq, one_q, q, p.quant);
@@ -120,8 +126,8 @@ pub(super) fn layer_fixed(
     for r in done {
         work.add(&r?);
     }
-    // Every tap at every box pixel, both planes (taps off the image multiply zeros).
-    work.macs += 2 * (side * side * bw * bh) as u64;
+    // Every tap at every box pixel, every plane (taps off the image multiply zeros).
+    work.macs += planes(plan) * (side * side * bw * bh) as u64;
     Ok(())
 }
 
@@ -139,9 +145,9 @@ pub(super) fn layer_f64(
     let (x0, y0, bw, bh) = boxr;
     let (w, h) = (img.width, img.height);
     let n2 = f64::from(img.n2);
-    let (xi, ai) = input(img, plan, l, boxr, |v, s| {
+    let [xi, ai, di] = input(img, plan, l, boxr, |v, s, d| {
         let s = f64::from(s) / n2;
-        (v * s, s)
+        (v * s, s, f64::from(d) / n2)
     });
     let (m, side) = (mask.m, mask.side());
     // Float weights where the fixed ones are non-zero, renormalised to sum 1.
@@ -156,13 +162,15 @@ pub(super) fn layer_f64(
     let (cols, rows_at) = (tap_map(x0, bw, w, m), tap_map(y0, bh, h, m));
     for y in 0..bh {
         for x in 0..bw {
-            let (mut sx, mut sa) = (0.0, 0.0);
+            let (mut sx, mut sa, mut sd) = (0.0, 0.0, 0.0);
             for ty in 0..side {
                 let Some(r) = rows_at[y + ty] else { continue };
                 for (tx, &cv) in kept[ty * side..(ty + 1) * side].iter().enumerate() {
                     let Some(c) = cols[x + tx] else { continue };
-                    sx += cv * xi[r * bw + c];
-                    sa += cv * ai[r * bw + c];
+                    let j = r * bw + c;
+                    sx += cv * xi[j];
+                    sa += cv * ai[j];
+                    sd += cv * di[j];
                 }
             }
             if sa <= 0.0 {
@@ -170,7 +178,11 @@ pub(super) fn layer_f64(
             }
             let pi = (y + y0) * w + x + x0;
             let col = sx / sa;
-            let an = sa.min(1.0);
+            let an = match plan.alpha_norm {
+                AlphaNorm::Behind => sa / sd,
+                AlphaNorm::Image => sa,
+            }
+            .min(1.0);
             if !def[pi] {
                 out[pi] = col;
                 def[pi] = true;

@@ -82,42 +82,45 @@ pub(super) fn fits_u64(max: u128, f: u32) -> bool {
         .is_some_and(|b| b >> f == max && b < 1u128 << 64)
 }
 
-/// The horizontal pass of row `src` (`bw` samples, taps `c`) at the positions `need`
-/// selects: the exact colour and alpha sums (before saturation).
+/// The horizontal pass of one row (`bw` samples of the colour, alpha and behind planes,
+/// taps `c`) at position `x`: the exact sums (before saturation).
 #[inline]
-pub(super) fn hsum<W: Word, P: Plane>(c: &[P], rx: &[P], ra: &[P], x: usize) -> (u128, u128) {
+pub(super) fn hsum<W: Word, P: Plane>(
+    c: &[P],
+    (rx, ra, rd): (&[P], &[P], &[P]),
+    x: usize,
+) -> (u128, u128, u128) {
     let m = c.len() / 2;
     let bw = rx.len();
     let t0 = m.saturating_sub(x);
     let t1 = c.len().min((bw + m).saturating_sub(x));
-    let (mut sx, mut sa) = (W::default(), W::default());
+    let (mut sx, mut sa, mut sd) = (W::default(), W::default(), W::default());
     let base = x + t0 - m;
     let n = t1.saturating_sub(t0);
-    for ((&cv, &vx), &va) in c[t0..t0 + n]
+    for (((&cv, &vx), &va), &vd) in c[t0..t0 + n]
         .iter()
         .zip(&rx[base..base + n])
         .zip(&ra[base..base + n])
+        .zip(&rd[base..base + n])
     {
         let cw = W::of(cv.get() as u128);
         sx += cw * W::of(vx.get() as u128);
         sa += cw * W::of(va.get() as u128);
+        sd += cw * W::of(vd.get() as u128);
     }
-    (sx.wide(), sa.wide())
+    (sx.wide(), sa.wide(), sd.wide())
 }
 
 /// The vertical pass of output row `y` of a `bw x bh` box over the columns `xa..xb`: the
-/// exact colour and alpha sums into `ox`, `oa` (indexed by column).
-#[allow(clippy::too_many_arguments)]
+/// exact colour, alpha and behind sums into `o` (indexed by column).
 #[inline]
 pub(super) fn vsum_row<W: Word, P: Plane>(
     c: &[P],
-    hx: &[P],
-    ha: &[P],
+    (hx, ha, hd): (&[P], &[P], &[P]),
     (bw, bh): (usize, usize),
     y: usize,
     (xa, xb): (usize, usize),
-    ox: &mut [W],
-    oa: &mut [W],
+    (ox, oa, od): (&mut [W], &mut [W], &mut [W]),
 ) {
     let m = c.len() / 2;
     let t0 = m.saturating_sub(y);
@@ -126,47 +129,55 @@ pub(super) fn vsum_row<W: Word, P: Plane>(
     const L: usize = 8;
     let mut x = xa;
     while x + L <= xb {
-        let (mut sx, mut sa) = ([W::default(); L], [W::default(); L]);
+        let (mut sx, mut sa, mut sd) = ([W::default(); L], [W::default(); L], [W::default(); L]);
         for (t, &cv) in c.iter().enumerate().take(t1).skip(t0) {
             let row = (y + t - m) * bw + x;
             let cw = W::of(cv.get() as u128);
-            let (hr, ar): (&[P; L], &[P; L]) = (
+            let (hr, ar, dr): (&[P; L], &[P; L], &[P; L]) = (
                 hx[row..row + L].try_into().expect("L columns"),
                 ha[row..row + L].try_into().expect("L columns"),
+                hd[row..row + L].try_into().expect("L columns"),
             );
             for j in 0..L {
                 sx[j] += cw * W::of(hr[j].get() as u128);
                 sa[j] += cw * W::of(ar[j].get() as u128);
+                sd[j] += cw * W::of(dr[j].get() as u128);
             }
         }
         ox[x..x + L].copy_from_slice(&sx);
         oa[x..x + L].copy_from_slice(&sa);
+        od[x..x + L].copy_from_slice(&sd);
         x += L;
     }
     let xa = x;
-    let (ox, oa) = (&mut ox[xa..xb], &mut oa[xa..xb]);
+    let (ox, oa, od) = (&mut ox[xa..xb], &mut oa[xa..xb], &mut od[xa..xb]);
     ox.fill(W::default());
     oa.fill(W::default());
+    od.fill(W::default());
     for (t, &cv) in c.iter().enumerate().take(t1).skip(t0) {
         let row = (y + t - m) * bw;
         let cw = W::of(cv.get() as u128);
-        for ((o, &v), (p, &a)) in ox
+        let r = row + xa..row + xb;
+        for (((o, &v), (p, &a)), (q, &d)) in ox
             .iter_mut()
-            .zip(&hx[row + xa..row + xb])
-            .zip(oa.iter_mut().zip(&ha[row + xa..row + xb]))
+            .zip(&hx[r.clone()])
+            .zip(oa.iter_mut().zip(&ha[r.clone()]))
+            .zip(od.iter_mut().zip(&hd[r]))
         {
             *o += cw * W::of(v.get() as u128);
             *p += cw * W::of(a.get() as u128);
+            *q += cw * W::of(d.get() as u128);
         }
     }
 }
 
 /// A saturated [`MacOut`] of exact sums.
 #[inline(always)]
-pub(super) fn mac_out(sx: u128, sa: u128, max: u128) -> MacOut {
+pub(super) fn mac_out((sx, sa, sd): (u128, u128, u128), max: u128) -> MacOut {
     MacOut {
         x: sx.min(max),
         a: sa,
+        d: sd,
         overflow: sx > max,
     }
 }

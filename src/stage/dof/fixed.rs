@@ -7,7 +7,7 @@ use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::scratch::Scratch;
 use super::strip::{LayerCx, run_strip, strip_rows};
 use super::uniform;
-use crate::config::DofCfg;
+use crate::config::{AlphaNorm, DofCfg};
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift, round_shift_i64};
 use crate::stage::Pool;
 use rayon::prelude::*;
@@ -17,7 +17,7 @@ use std::sync::Mutex;
 /// Work and overflow counts of the fixed model.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct DofWork {
-    /// Multiply-accumulates (both passes, intensity and alpha planes).
+    /// Multiply-accumulates (both passes, every plane: [`planes`]).
     pub macs: u64,
     /// Layer colour divides.
     pub divides: u64,
@@ -76,6 +76,8 @@ pub struct MacOut {
     pub x: u128,
     /// Alpha sum `sum c_t a_t` (exact).
     pub a: u128,
+    /// Behind sum `sum c_t d_t` (exact): the alpha normaliser.
+    pub d: u128,
     /// The colour sum did not fit the word (counted; stops the run with overflow ERROR).
     pub overflow: bool,
 }
@@ -83,28 +85,30 @@ pub struct MacOut {
 /// One output sample of the horizontal or vertical pass: over the taps `t` whose sample
 /// `pos + t - M` lies on the line `[0, len)` (`M = coef.len() / 2`; samples off the line are
 /// zero), the colour sum saturated to `max` (the line-buffer or accumulator word) and the
-/// exact alpha sum. `sample(i)` gives the (colour, alpha) samples at line position `i`.
-/// The HDL model `hdl-models/rtl/dof_row_mac.v` is this function.
+/// exact alpha and behind sums. `sample(i)` gives the (colour, alpha, behind) samples at
+/// line position `i`. The HDL model `hdl-models/rtl/dof_row_mac.v` is this function.
 #[inline(always)]
 pub fn row_mac(
     coef: &[u64],
     pos: usize,
     len: usize,
     max: u128,
-    sample: impl Fn(usize) -> (u128, u128),
+    sample: impl Fn(usize) -> (u128, u128, u128),
 ) -> MacOut {
     let m = coef.len() / 2;
     let t0 = m.saturating_sub(pos);
     let t1 = coef.len().min((len + m).saturating_sub(pos));
-    let (mut sx, mut sa) = (0u128, 0u128);
+    let (mut sx, mut sa, mut sd) = (0u128, 0u128, 0u128);
     for (t, &cv) in coef.iter().enumerate().take(t1).skip(t0) {
-        let (x, a) = sample(pos + t - m);
+        let (x, a, d) = sample(pos + t - m);
         sx += cv as u128 * x;
         sa += cv as u128 * a;
+        sd += cv as u128 * d;
     }
     MacOut {
         x: sx.min(max),
         a: sa,
+        d: sd,
         overflow: sx > max,
     }
 }
@@ -126,25 +130,59 @@ pub struct LayerPlanes<'a> {
     pub xi: &'a [u64],
     /// Input alpha plane `m`.
     pub ai: &'a [u64],
+    /// Input behind plane (the coverage of the layer and those behind it).
+    pub di: &'a [u64],
     /// Line buffer: horizontal colour sums (saturated).
     pub hx: &'a [u64],
     /// Line buffer: horizontal alpha sums.
     pub ha: &'a [u64],
+    /// Line buffer: horizontal behind sums.
+    pub hd: &'a [u64],
 }
 
-/// The pixel's share in a layer (in `1/n2` units).
+/// The pixel's share in layer `l` and its share in `l` and every layer behind it (the
+/// alpha normaliser's plane; with [`AlphaNorm::Image`] the whole pixel), in `1/n2` units.
 #[inline]
-pub(super) fn share(plan: &LayerPlan, img_key: u32, cov: u16, idx: u16, l: usize, n2: u32) -> u32 {
+pub(super) fn share(
+    plan: &LayerPlan,
+    img_key: u32,
+    cov: u16,
+    idx: u16,
+    l: usize,
+    n2: u32,
+) -> (u32, u32) {
     let own = if img_key == u32::MAX { 0 } else { cov as u32 };
-    let mut m = if idx as usize == l && img_key != u32::MAX {
-        own
-    } else {
-        0
-    };
-    if plan.background == Some(l) {
-        m += n2 - own.min(n2);
+    let (mut m, mut b) = (0, 0);
+    if img_key != u32::MAX {
+        if idx as usize == l {
+            m = own;
+        }
+        if idx as usize <= l {
+            b = own;
+        }
     }
-    m
+    if let Some(bg) = plan.background
+        && bg <= l
+    {
+        let rest = n2 - own.min(n2);
+        b += rest;
+        if bg == l {
+            m += rest;
+        }
+    }
+    match plan.alpha_norm {
+        AlphaNorm::Behind => (m, b),
+        AlphaNorm::Image => (m, n2),
+    }
+}
+
+/// The planes a blurred layer's passes multiply: colour and alpha, and with
+/// [`AlphaNorm::Behind`] the behind share (the alpha's normaliser).
+pub(super) fn planes(plan: &LayerPlan) -> u64 {
+    match plan.alpha_norm {
+        AlphaNorm::Behind => 3,
+        AlphaNorm::Image => 2,
+    }
 }
 
 /// How the emulator computes a layer's passes; the outputs and work counts are the same.
@@ -284,9 +322,11 @@ fn exec_with<P: Plane>(
             s.input(img, plan, l, (x0, y0, bw, bh));
             for y in 0..bh {
                 for x in 0..bw {
-                    let (a, v) = (
-                        s.ai[y * bw + x].get() as u128,
-                        s.xi[y * bw + x].get() as u128,
+                    let i = y * bw + x;
+                    let (a, v, d) = (
+                        s.ai[i].get() as u128,
+                        s.xi[i].get() as u128,
+                        s.di[i].get() as u128,
                     );
                     if a == 0 {
                         continue;
@@ -294,7 +334,7 @@ fn exec_with<P: Plane>(
                     let pi = (y + y0) * w + x + x0;
                     work.passthrough += 1;
                     let col = round_shift(((v << g) / a) as i128, 0, p.quant) as u128;
-                    let aq = (a << q) / img.n2 as u128;
+                    let aq = (a << q) / d;
                     composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
                     work.composites += 1;
                 }
@@ -369,8 +409,8 @@ fn exec_with<P: Plane>(
             }
         }
         let active = (bw * bh) as u64 - skipped[l];
-        // Both passes, colour and alpha planes.
-        work.macs += 2 * 2 * c.len() as u64 * active;
+        // Both passes, every plane.
+        work.macs += 2 * planes(plan) * c.len() as u64 * active;
     }
     // The composite carries `g` guard bits below the frame LSB.
     let frame_q = Quantizer::new(frame_fmt, p.quant, Overflow::Sat);

@@ -4,6 +4,7 @@ use super::fixed::Exec;
 use super::fixed::{border_sums, share};
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::uniform;
+use crate::config::AlphaNorm;
 
 /// The float taps on the fixed mask's support (taps that quantise to 0 are 0), renormalised
 /// to sum 1. The support decides which layers reach a pixel and hence which one fills it
@@ -69,16 +70,18 @@ pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> 
         let wy = border_sums(c, h);
         let mut xi = vec![0.0; bw * bh];
         let mut ai = vec![0.0; bw * bh];
+        let mut di = vec![0.0; bw * bh];
         for y in 0..bh {
             for x in 0..bw {
                 let pi = (y + y0) * w + x + x0;
-                let s = share(plan, img.key[pi], img.cov[pi], plan.index[pi], l, img.n2) as f64
-                    / img.n2 as f64;
+                let (s, d) = share(plan, img.key[pi], img.cov[pi], plan.index[pi], l, img.n2);
+                let (s, d) = (s as f64 / img.n2 as f64, d as f64 / img.n2 as f64);
                 xi[y * bw + x] = img.value[pi] * s;
                 ai[y * bw + x] = s;
+                di[y * bw + x] = d;
             }
         }
-        let (fx, fa) = match exec {
+        let (fx, fa, fd) = match exec {
             Exec::Full => {
                 let pass = |src: &[f64], horizontal: bool| -> Vec<f64> {
                     let mut dst = vec![0.0; bw * bh];
@@ -101,9 +104,10 @@ pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> 
                     }
                     dst
                 };
-                (pass(&pass(&xi, true), false), pass(&pass(&ai, true), false))
+                let both = |p: &[f64]| pass(&pass(p, true), false);
+                (both(&xi), both(&ai), both(&di))
             }
-            Exec::SkipUniform | Exec::Strips(_) => fast_passes(c, (bw, bh), &xi, &ai),
+            Exec::SkipUniform | Exec::Strips(_) => fast_passes(c, (bw, bh), [&xi, &ai, &di]),
         };
         for y in 0..bh {
             for x in 0..bw {
@@ -113,7 +117,11 @@ pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> 
                 }
                 let pi = (y + y0) * w + x + x0;
                 let col = fx[y * bw + x] / a;
-                let an = (a / (wx[x + x0] * wy[y + y0])).min(1.0);
+                let an = match plan.alpha_norm {
+                    AlphaNorm::Behind => a / fd[y * bw + x],
+                    AlphaNorm::Image => a / (wx[x + x0] * wy[y + y0]),
+                }
+                .min(1.0);
                 if !def[pi] {
                     out[pi] = col;
                     def[pi] = true;
@@ -126,21 +134,21 @@ pub fn layered_f64_exec(img: &DepthImage<f64>, plan: &LayerPlan, exec: Exec) -> 
     out
 }
 
-/// Both passes of both planes over a `bw x bh` box, the same sums in the same order as the
-/// per-sample passes: uniform windows (docs/dof.md) by [`fold`], the rest row by row.
+/// Both passes of the three planes (colour, alpha, behind) over a `bw x bh` box, the same
+/// sums in the same order as the per-sample passes: uniform windows (docs/dof.md) by
+/// [`fold`], the rest row by row.
 fn fast_passes(
     c: &[f64],
     (bw, bh): (usize, usize),
-    xi: &[f64],
-    ai: &[f64],
-) -> (Vec<f64>, Vec<f64>) {
+    [xi, ai, di]: [&[f64]; 3],
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let m = c.len() / 2;
     let full: Vec<bool> = ai.iter().map(|&a| a == 1.0).collect();
     let val: Vec<u64> = xi.iter().map(|v| v.to_bits()).collect();
     let win = uniform::windows(bw, bh, m, &full, &val);
     let bsx = border_sums(c, bw);
     // Horizontal pass.
-    let (mut hx, mut ha) = (vec![0.0; bw * bh], vec![0.0; bw * bh]);
+    let mut h = [(); 3].map(|_| vec![0.0; bw * bh]);
     let mut last = (u64::MAX, 0.0f64); // (value bits, interior row sum)
     for y in 0..bh {
         #[allow(clippy::needless_range_loop)] // x is the position, not only an index
@@ -149,7 +157,7 @@ fn fast_passes(
             let r = tap_range(c, x, bw);
             if win.hu[i] {
                 let v = xi[i];
-                hx[i] = if r == (0, c.len()) {
+                h[0][i] = if r == (0, c.len()) {
                     if last.0 != v.to_bits() {
                         last = (v.to_bits(), fold(c, r, v));
                     }
@@ -157,38 +165,44 @@ fn fast_passes(
                 } else {
                     fold(c, r, v)
                 };
-                ha[i] = bsx[x];
+                // A uniform window is fully covered: its alpha and behind shares are 1.
+                h[1][i] = bsx[x];
+                h[2][i] = bsx[x];
                 continue;
             }
             let base = y * bw + x + r.0 - m;
-            let (mut sx, mut sa) = (0.0, 0.0);
+            let mut s = [0.0; 3];
             for (k, &cv) in c[r.0..r.1].iter().enumerate() {
-                sx += cv * xi[base + k];
-                sa += cv * ai[base + k];
+                for (sp, p) in s.iter_mut().zip([xi, ai, di]) {
+                    *sp += cv * p[base + k];
+                }
             }
-            hx[i] = sx;
-            ha[i] = sa;
+            for (hp, sp) in h.iter_mut().zip(s) {
+                hp[i] = sp;
+            }
         }
     }
     // Vertical pass: all the window's line sums of a uniform pixel equal its own.
     let ga: Vec<f64> = bsx.iter().map(|&b| fold(c, (0, c.len()), b)).collect();
-    let (mut fx, mut fa) = (vec![0.0; bw * bh], vec![0.0; bw * bh]);
+    let mut f = [(); 3].map(|_| vec![0.0; bw * bh]);
     let mut last = (u64::MAX, 0.0f64);
     for y in 0..bh {
         let r = tap_range(c, y, bh);
         let interior = r == (0, c.len());
         let row = y * bw..(y + 1) * bw;
         let ur = &win.u[row.clone()];
-        let (ox, oa) = (&mut fx[row.clone()], &mut fa[row]);
+        let [fx, fa, fd] = &mut f;
+        let (ox, oa, od) = (&mut fx[row.clone()], &mut fa[row.clone()], &mut fd[row]);
         let mut x = 0;
         while x < bw {
             if interior && ur[x] {
-                let hv = hx[y * bw + x];
+                let hv = h[0][y * bw + x];
                 if last.0 != hv.to_bits() {
                     last = (hv.to_bits(), fold(c, r, hv));
                 }
                 ox[x] = last.1;
                 oa[x] = ga[x];
+                od[x] = ga[x];
                 x += 1;
                 continue;
             }
@@ -199,11 +213,13 @@ fn fast_passes(
             for (t, &cv) in c.iter().enumerate().take(r.1).skip(r.0) {
                 let src = (y + t - m) * bw;
                 for k in xa..x {
-                    ox[k] += cv * hx[src + k];
-                    oa[k] += cv * ha[src + k];
+                    ox[k] += cv * h[0][src + k];
+                    oa[k] += cv * h[1][src + k];
+                    od[k] += cv * h[2][src + k];
                 }
             }
         }
     }
-    (fx, fa)
+    let [fx, fa, fd] = f;
+    (fx, fa, fd)
 }

@@ -4,7 +4,7 @@
 use super::kernel::{KernelDifferences, Mask2, kernel_half_size, kernel_taps_f64};
 use super::lens::{LensMap, SIGMA_FRAC};
 use super::mask::taps_fixed;
-use crate::config::DofKernel;
+use crate::config::{AlphaNorm, DofKernel};
 use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
 use crate::stage::Pool;
 use serde::Serialize;
@@ -94,6 +94,20 @@ pub struct LayerPlan {
     /// Per layer, the box pixels in uniform tiles the hardware skips
     /// (`dof.skip_uniform_tiles`; set by the fixed run, empty otherwise).
     pub skipped: Vec<u64>,
+    /// What each layer's alpha is normalised by (`dof.alpha_norm`).
+    pub alpha_norm: AlphaNorm,
+}
+
+impl LayerPlan {
+    /// How far a layer's box reaches past its pixels, in mask half-sizes: `M` for its
+    /// blurred planes; with [`AlphaNorm::Behind`] `2 M`, because the coverage behind it is
+    /// read `M` further out than its own pixels reach.
+    pub fn margin(&self, m: usize) -> usize {
+        match self.alpha_norm {
+            AlphaNorm::Behind => 2 * m,
+            AlphaNorm::Image => m,
+        }
+    }
 }
 
 /// Grows the layers far to near (see the module notes). Errors name the limit exceeded.
@@ -254,6 +268,7 @@ pub fn plan_layers_in(
         index,
         background,
         skipped: Vec::new(),
+        alpha_norm: p.alpha_norm,
     })
 }
 
@@ -261,7 +276,7 @@ pub fn plan_layers_in(
 /// output sample per box pixel; a sigma = 0 layer passes its box through) and its taps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct LayerWork {
-    /// Pixels of the layer's box (input widened by M, clipped to the image).
+    /// Pixels of the layer's box (input widened by [`LayerPlan::margin`], clipped to the image).
     pub pixels: u64,
     /// Mask taps `2M + 1` (1: passed through).
     pub taps: u32,
@@ -276,7 +291,8 @@ pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWor
         .enumerate()
         .filter_map(|(l, layer)| {
             let all = plan.background == Some(l);
-            let (x0, y0, x1, y1) = layer_box(width, height, &plan.index, l, layer.m, all)?;
+            let m = plan.margin(layer.m);
+            let (x0, y0, x1, y1) = layer_box(width, height, &plan.index, l, m, all)?;
             Some(LayerWork {
                 pixels: ((x1 - x0) * (y1 - y0)) as u64,
                 taps: 2 * layer.m as u32 + 1,
@@ -314,7 +330,7 @@ pub(super) fn layer_boxes(
             } else if x0 == usize::MAX {
                 None
             } else {
-                let m = layer.m;
+                let m = plan.margin(layer.m);
                 Some((
                     x0.saturating_sub(m),
                     y0.saturating_sub(m),
@@ -326,7 +342,7 @@ pub(super) fn layer_boxes(
         .collect()
 }
 
-/// Bounding box (x0, y0, x1, y1 exclusive) of a layer's input, widened by M and clipped.
+/// Bounding box (x0, y0, x1, y1 exclusive) of a layer's input, widened by `m` and clipped.
 pub(super) fn layer_box(
     w: usize,
     h: usize,

@@ -10,8 +10,8 @@ use super::uniform;
 /// One output row's exact vertical sums over the columns whose window is not uniform.
 #[derive(Default)]
 pub(super) struct RowSums {
-    narrow: (Vec<u64>, Vec<u64>),
-    wide: (Vec<u128>, Vec<u128>),
+    narrow: (Vec<u64>, Vec<u64>, Vec<u64>),
+    wide: (Vec<u128>, Vec<u128>, Vec<u128>),
     is_wide: bool,
 }
 
@@ -22,9 +22,11 @@ impl RowSums {
         if is_wide {
             self.wide.0.resize(bw, 0);
             self.wide.1.resize(bw, 0);
+            self.wide.2.resize(bw, 0);
         } else {
             self.narrow.0.resize(bw, 0);
             self.narrow.1.resize(bw, 0);
+            self.narrow.2.resize(bw, 0);
         }
     }
 
@@ -32,8 +34,7 @@ impl RowSums {
     pub(super) fn fill<P: Plane>(
         &mut self,
         c: &[P],
-        hx: &[P],
-        ha: &[P],
+        (hx, ha, hd): (&[P], &[P], &[P]),
         dim: (usize, usize),
         y: usize,
         uniform: &[bool],
@@ -49,52 +50,53 @@ impl RowSums {
                 x += 1;
             }
             if self.is_wide {
+                let o = &mut self.wide;
                 fast::vsum_row(
                     c,
-                    hx,
-                    ha,
+                    (hx, ha, hd),
                     dim,
                     y,
                     (xa, x),
-                    &mut self.wide.0,
-                    &mut self.wide.1,
+                    (&mut o.0, &mut o.1, &mut o.2),
                 );
             } else {
+                let o = &mut self.narrow;
                 fast::vsum_row(
                     c,
-                    hx,
-                    ha,
+                    (hx, ha, hd),
                     dim,
                     y,
                     (xa, x),
-                    &mut self.narrow.0,
-                    &mut self.narrow.1,
+                    (&mut o.0, &mut o.1, &mut o.2),
                 );
             }
         }
     }
 
-    pub(super) fn get(&self, x: usize) -> (u128, u128) {
+    pub(super) fn get(&self, x: usize) -> (u128, u128, u128) {
         if self.is_wide {
-            (self.wide.0[x], self.wide.1[x])
+            (self.wide.0[x], self.wide.1[x], self.wide.2[x])
         } else {
-            (self.narrow.0[x] as u128, self.narrow.1[x] as u128)
+            let n = &self.narrow;
+            (n.0[x] as u128, n.1[x] as u128, n.2[x] as u128)
         }
     }
 }
 
 /// A layer's planes over a strip of its box, kept between strips and layers (one
-/// allocation for the largest): the input colour `x * m`, alpha `m` and value, the
+/// allocation for the largest): the input colour `x * m`, alpha `m`, behind share and value, the
 /// full-share flags, the uniform windows, the line buffer and one row's vertical sums, in
 /// [`Plane`] words.
 pub(super) struct Scratch<P> {
     pub xi: Vec<P>,
     pub ai: Vec<P>,
+    pub di: Vec<P>,
     pub val: Vec<u32>,
     pub full: Vec<bool>,
     pub win: uniform::Windows,
     pub hx: Vec<P>,
     pub ha: Vec<P>,
+    pub hd: Vec<P>,
     pub rows: RowSums,
 }
 
@@ -103,11 +105,13 @@ impl<P: Plane> Scratch<P> {
         Self {
             xi: Vec::new(),
             ai: Vec::new(),
+            di: Vec::new(),
             val: Vec::new(),
             full: Vec::new(),
             win: uniform::Windows::default(),
             hx: Vec::new(),
             ha: Vec::new(),
+            hd: Vec::new(),
             rows: RowSums::default(),
         }
     }
@@ -122,15 +126,17 @@ impl<P: Plane> Scratch<P> {
     ) {
         self.xi.clear();
         self.ai.clear();
+        self.di.clear();
         self.val.clear();
         for y in y0..y0 + bh {
             let r = y * img.width + x0..y * img.width + x0 + bw;
             let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
             let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
             for x in 0..bw {
-                let s = share(plan, key[x], cov[x], idx[x], l, img.n2);
+                let (s, d) = share(plan, key[x], cov[x], idx[x], l, img.n2);
                 self.xi.push(P::put(u64::from(value[x]) * u64::from(s)));
                 self.ai.push(P::put(u64::from(s)));
+                self.di.push(P::put(u64::from(d)));
                 self.val.push(value[x]);
             }
         }

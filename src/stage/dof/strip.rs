@@ -10,7 +10,7 @@ use super::fixed::{DofWork, Exec, LayerPlanes, composite, row_mac, udiv};
 use super::layers::{DepthImage, LayerPlan};
 use super::scratch::Scratch;
 use super::uniform;
-use crate::config::DofCfg;
+use crate::config::{AlphaNorm, DofCfg};
 use crate::fixed::Overflow;
 
 /// What every strip of one blurred layer shares.
@@ -94,7 +94,7 @@ pub(super) fn run_strip<P: Plane>(
     let (e0, e1) = (r0.saturating_sub(m), (r1 + m).min(bh));
     let eh = e1 - e0;
     s.input(img, plan, l, (x0, y0 + e0, bw, eh));
-    let (xi, ai, val) = (&s.xi[..], &s.ai[..], &s.val[..]);
+    let (xi, ai, di, val) = (&s.xi[..], &s.ai[..], &s.di[..], &s.val[..]);
     // Uniform windows (docs/dof.md): exact without MACs where, besides the window
     // being uniform, neither word saturates and the box's tap sums are the image's.
     s.full.clear();
@@ -129,34 +129,40 @@ pub(super) fn run_strip<P: Plane>(
     };
     // Horizontal pass into the line buffer: a saturated sum fits u64
     // (`line_bits` <= 64) and so does an alpha sum (taps of at most 2^20 times n2).
-    let (hx, ha) = (&mut s.hx, &mut s.ha);
+    let (hx, ha, hd) = (&mut s.hx, &mut s.ha, &mut s.hd);
     hx.clear();
     ha.clear();
+    hd.clear();
     // `x * m` is at most a u32 code times n2: a bound, not a scan.
     let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
     let mut hmax = 0u64;
     for yy in 0..eh {
-        let (rx, ra) = (&xi[yy * bw..(yy + 1) * bw], &ai[yy * bw..(yy + 1) * bw]);
+        let row = yy * bw..(yy + 1) * bw;
+        let (rx, ra, rd) = (&xi[row.clone()], &ai[row.clone()], &di[row]);
         // Rows of the neighbouring strips are computed again, counted there.
         let counted = (r0..r1).contains(&(e0 + yy));
         for x in 0..bw {
             let i = yy * bw + x;
             let r = match exec {
                 Exec::Full => row_mac(c, x, bw, line_max, |i| {
-                    (rx[i].get() as u128, ra[i].get() as u128)
+                    (
+                        rx[i].get() as u128,
+                        ra[i].get() as u128,
+                        rd[i].get() as u128,
+                    )
                 }),
-                _ if hu[i] => fast::mac_out(
-                    rx[x].get() as u128 * bsx[x] as u128,
-                    ra[x].get() as u128 * bsx[x] as u128,
-                    line_max,
-                ),
+                _ if hu[i] => {
+                    let b = bsx[x] as u128;
+                    let v = |p: &[P]| p[x].get() as u128 * b;
+                    fast::mac_out((v(rx), v(ra), v(rd)), line_max)
+                }
                 _ => {
-                    let (sx, sa) = if wide_h {
-                        fast::hsum::<u128, P>(cp, rx, ra, x)
+                    let sums = if wide_h {
+                        fast::hsum::<u128, P>(cp, (rx, ra, rd), x)
                     } else {
-                        fast::hsum::<u64, P>(cp, rx, ra, x)
+                        fast::hsum::<u64, P>(cp, (rx, ra, rd), x)
                     };
-                    fast::mac_out(sx, sa, line_max)
+                    fast::mac_out(sums, line_max)
                 }
             };
             if r.overflow && counted {
@@ -167,16 +173,19 @@ pub(super) fn run_strip<P: Plane>(
             }
             hx.push(P::put(r.x as u64));
             ha.push(P::put(r.a as u64));
-            hmax = hmax.max(r.x as u64).max(r.a as u64);
+            hd.push(P::put(r.d as u64));
+            hmax = hmax.max(r.x as u64).max(r.d as u64);
         }
     }
-    let (hx, ha) = (&hx[..], &ha[..]);
-    if let (Some(observe), Some(xi), Some(ai), Some(hx), Some(ha)) = (
+    let (hx, ha, hd) = (&hx[..], &ha[..], &hd[..]);
+    if let (Some(observe), Some(xi), Some(ai), Some(di), Some(hx), Some(ha), Some(hd)) = (
         observe,
         P::as_u64(xi),
         P::as_u64(ai),
+        P::as_u64(di),
         P::as_u64(hx),
         P::as_u64(ha),
+        P::as_u64(hd),
     ) {
         observe(&LayerPlanes {
             layer: l,
@@ -186,8 +195,10 @@ pub(super) fn run_strip<P: Plane>(
             bh,
             xi,
             ai,
+            di,
             hx,
             ha,
+            hd,
         });
     }
     // Vertical pass, colour, alpha, composite.
@@ -197,7 +208,7 @@ pub(super) fn run_strip<P: Plane>(
         let yy = y - e0;
         let ur = &u[yy * bw..(yy + 1) * bw];
         if exec != Exec::Full {
-            s.rows.fill(cp, hx, ha, (bw, eh), yy, ur);
+            s.rows.fill(cp, (hx, ha, hd), (bw, eh), yy, ur);
         }
         for x in 0..bw {
             let i = yy * bw + x;
@@ -222,12 +233,14 @@ pub(super) fn run_strip<P: Plane>(
             }
             let r = match exec {
                 Exec::Full => row_mac(c, yy, eh, acc_max, |i| {
-                    (hx[i * bw + x].get() as u128, ha[i * bw + x].get() as u128)
+                    let j = i * bw + x;
+                    (
+                        hx[j].get() as u128,
+                        ha[j].get() as u128,
+                        hd[j].get() as u128,
+                    )
                 }),
-                _ => {
-                    let (sx, sa) = s.rows.get(x);
-                    fast::mac_out(sx, sa, acc_max)
-                }
+                _ => fast::mac_out(s.rows.get(x), acc_max),
             };
             if r.overflow {
                 work.acc_overflows += 1;
@@ -235,7 +248,7 @@ pub(super) fn run_strip<P: Plane>(
                     return Err(("dof.acc".into(), p.acc_bits));
                 }
             }
-            let (sx, sa) = (r.x, r.a);
+            let (sx, sa, sd) = (r.x, r.a, r.d);
             if sa == 0 {
                 continue;
             }
@@ -244,7 +257,10 @@ pub(super) fn run_strip<P: Plane>(
             }
             // colour = round(F 2^g / A): half-up integer divide
             let col = udiv(sx << (g + 1), sa).div_ceil(2);
-            let ws = wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128;
+            let ws = match plan.alpha_norm {
+                AlphaNorm::Behind => sd,
+                AlphaNorm::Image => wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128,
+            };
             let aq = udiv(sa << (q + 1), ws).div_ceil(2).min(one_q);
             composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
             work.composites += 1;
