@@ -549,9 +549,10 @@ fn dof_narrow() -> HwConfig {
     })
 }
 
-/// Index of the first expected-output field of a dof bench (pass, layer, pos, len, windows).
+/// Index of the first expected-output field of a dof bench (pass, layer, pos, len, windows;
+/// then sx, ovf, sa, sd, w).
 fn dof_out(b: &Bench) -> usize {
-    b.fields.len() - 4
+    b.fields.len() - 5
 }
 
 #[test]
@@ -574,7 +575,14 @@ fn dof_row_mac_agrees_on_scene_taps_at_two_widths() {
             "pass {pass} saturates"
         );
     }
-    assert!(narrow.vectors.iter().any(|v| v[o + 3] < 1 << 8));
+    assert!(narrow.vectors.iter().any(|v| v[o + 4] < 1 << 8));
+    // Some horizontal scene taps see nearer layers: their behind sum falls below a whole
+    // pixel's (16 samples times the in-line taps' sum).
+    assert!(
+        narrow.vectors[..n_scene]
+            .iter()
+            .any(|v| v[0] == 0 && v[o + 3] < v[o + 4] * 16)
+    );
     // The default widths never saturate.
     assert!(
         default
@@ -607,19 +615,25 @@ fn dof_row_mac_gates_off_line_taps_and_broken_vectors_fail() {
     }
     let sc = Scene::default_scene();
     let mut b = hdl::vectors(StageId::Dof, &sc, &dof_narrow()).expect("bench");
-    let (o, taps) = (dof_out(&b), (b.fields.len() - 8) / 2);
+    let (o, taps) = (dof_out(&b), (b.fields.len() - 9) / 3);
     let half = taps / 2;
     // Vectors at the left image border: their first window samples lie off the line.
     let border: Vec<usize> = (0..b.vectors.len())
         .filter(|&k| b.vectors[k][2] == 0 && b.vectors[k][3] > 1)
-        .take(4)
+        .take(5)
         .collect();
-    assert_eq!(border.len(), 4);
+    assert_eq!(border.len(), 5);
     // Off-line samples are ignored: changing them does not fail the vector.
     b.vectors[border[0]][4] ^= 1;
     b.vectors[border[0]][4 + taps] ^= 1;
-    // A changed expected colour sum, overflow flag or border weight fails.
-    for (k, field) in [(border[1], o), (border[2], o + 1), (border[3], o + 3)] {
+    b.vectors[border[0]][4 + 2 * taps] ^= 1;
+    // A changed expected colour sum, overflow flag, behind sum or border weight fails.
+    for (k, field) in [
+        (border[1], o),
+        (border[2], o + 1),
+        (border[3], o + 3),
+        (border[4], o + 4),
+    ] {
         b.vectors[k][field] ^= 1;
     }
     // So does an on-line input sample whose coefficient is non-zero (the centre tap) of an
@@ -629,7 +643,7 @@ fn dof_row_mac_gates_off_line_taps_and_broken_vectors_fail() {
         .expect("an unsaturated vector");
     b.vectors[k][4 + half] ^= 1 << 4;
     match run(&b, "dof-broken") {
-        Verdict::Failed(m) => assert!(m.starts_with("4 of "), "{m}"),
+        Verdict::Failed(m) => assert!(m.starts_with("5 of "), "{m}"),
         v => panic!("broken vectors passed: {v:?}"),
     }
 }
