@@ -2,7 +2,7 @@
 
 use super::layers::LayerPlan;
 use super::lens::LensMap;
-use crate::config::{DofCfg, DofKernel, SigmaForm};
+use crate::config::{AlphaNorm, DofCfg, DofKernel, SigmaForm};
 use crate::fixed::{QFormat, SignalStats};
 use crate::stage::{Cost, MemImage, Memory, Unit};
 use std::sync::Arc;
@@ -83,12 +83,16 @@ pub fn cost(
     let rom_words: u64 = plan.layers.iter().map(|l| l.m as u64 + 1).sum();
     let taps = (2 * m_max + 1) as u32;
     let xm_bits = code_bits + a_bits;
-    Cost::new(
+    // With alpha_norm = behind the behind share is a third plane: a line-buffer field, tap
+    // multipliers and adders as the alpha's.
+    let behind = p.alpha_norm == AlphaNorm::Behind;
+    let alpha_planes = if behind { 2 } else { 1 };
+    let mut cost = Cost::new(
         vec![
             Memory::ram(
                 LINE_BUFFERS,
                 (2 * m_max + 1) * width,
-                p.line_bits + alpha_line,
+                p.line_bits + alpha_planes * alpha_line,
             ),
             Memory::ram(COMPOSITE, width * height, code_bits + p.guard_bits),
             Memory::rom(COEF_ROM, rom_words, p.coef_bits + 1),
@@ -121,9 +125,24 @@ pub fn cost(
                 p.alpha_bits + 1,
             ),
         ],
-    )
-    .merge(lens_cost(lens))
-    .merge(if p.skip_uniform_tiles {
+    );
+    if behind {
+        cost = cost.merge(Cost::new(
+            vec![],
+            vec![Unit::adder(
+                "behind tap sums",
+                2 * taps,
+                2 * p.coef_bits + a_bits + 1,
+            )],
+            vec![Unit::mul(
+                "behind taps",
+                2 * taps,
+                alpha_line,
+                p.coef_bits + 1,
+            )],
+        ));
+    }
+    cost.merge(lens_cost(lens)).merge(if p.skip_uniform_tiles {
         uniform_cost(m_max, width, height, code_bits, a_bits, p)
     } else {
         Cost::new(vec![], vec![], vec![])
@@ -154,9 +173,12 @@ fn disc_cost(
     let xm_bits = code_bits + a_bits;
     let w_bits = 2 * p.coef_bits + 1;
     let rom_words: u64 = plan.layers.iter().map(|l| (l.m as u64 + 1).pow(2)).sum();
-    Cost::new(
+    // With alpha_norm = behind the behind share is a third plane (as the alpha's).
+    let behind = p.alpha_norm == AlphaNorm::Behind;
+    let planes_a = if behind { 2 } else { 1 };
+    let mut cost = Cost::new(
         vec![
-            Memory::ram(LINE_BUFFERS, 2 * m_max * width, xm_bits + a_bits),
+            Memory::ram(LINE_BUFFERS, 2 * m_max * width, xm_bits + planes_a * a_bits),
             Memory::ram(COMPOSITE, width * height, code_bits + p.guard_bits),
             Memory::rom(COEF_ROM, rom_words, w_bits),
         ],
@@ -186,7 +208,15 @@ fn disc_cost(
                 p.alpha_bits + 1,
             ),
         ],
-    )
+    );
+    if behind {
+        cost = cost.merge(Cost::new(
+            vec![],
+            vec![Unit::adder("2-D tap sum (behind)", taps, w_bits + a_bits)],
+            vec![Unit::mul("2-D taps (behind)", taps, a_bits, w_bits)],
+        ));
+    }
+    cost
 }
 
 /// Name of the uniform-run line buffer (`dof.skip_uniform_tiles`).
