@@ -67,10 +67,19 @@ fn count(f: impl FnOnce()) -> (usize, Vec<usize>) {
 
 #[test]
 fn from_the_second_frame_on_no_frame_sized_buffer_is_allocated() {
-    let hw = HwConfig::default_config();
-    for name in ["default", "default-pinhole", "default-colour"] {
+    let plain = HwConfig::default_config();
+    // The post stages too: an ordered dither after the LUT (its extended LUT is made once
+    // per run, its output plane comes from the pool).
+    let mut dithered = HwConfig::default_config();
+    dithered.dither.kind = igemu::config::DitherKind::Bayer8;
+    for (name, hw) in [
+        ("default", &plain),
+        ("default-pinhole", &plain),
+        ("default-colour", &plain),
+        ("default-pinhole", &dithered),
+    ] {
         let scene = Scene::embedded(name).expect("embedded");
-        let once = fast::emulate(&scene, &hw, RunOptions::FIXED_ONLY, None).expect("runs");
+        let once = fast::emulate(&scene, hw, RunOptions::FIXED_ONLY, None).expect("runs");
         let g = once.plan.layout.grid;
         assert!(!once.channels[0].is_empty());
         let pixels = g.width as usize * g.height as usize;
@@ -81,7 +90,7 @@ fn from_the_second_frame_on_no_frame_sized_buffer_is_allocated() {
         for _ in 0..3 {
             let (n, sizes) = count(|| {
                 let e = emu
-                    .emulate(&scene, &hw, RunOptions::FIXED_ONLY, None)
+                    .emulate(&scene, hw, RunOptions::FIXED_ONLY, None)
                     .expect("runs");
                 // Compared here (a copy would be a frame-sized allocation of its own).
                 same.push(e.channels == once.channels);

@@ -137,7 +137,7 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
         if matches!(q, QPrim::Point { .. }) {
             continue;
         }
-        for f in frags.of(p) {
+        for f in frags.of(p).flatten() {
             let (s, zf) = (f.s as usize, conv(f.z));
             ties += (zf == z[s]) as u64;
             if zf < z[s] {
@@ -157,7 +157,7 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
             QPrim::Point { v, .. } => {
                 let vis = frags
                     .of(p)
-                    .iter()
+                    .flatten()
                     .filter(|f| conv(f.z) < z[f.s as usize])
                     .map(|f| f.s)
                     .collect();
@@ -267,7 +267,7 @@ fn light_points_are_tested_against_the_finished_buffer_and_never_write() {
     assert_eq!(a.samples.prim, shifted);
     let frags = with.outcome.taps.fixed.frags();
     let counts: Vec<usize> = a.points.iter().map(|p| p.samples.len()).collect();
-    let all: Vec<usize> = (0..3).map(|p| frags.of(p).len()).collect();
+    let all: Vec<usize> = (0..3).map(|p| frags.count(p)).collect();
     assert!(all.iter().all(|&n| n > 0));
     assert_eq!(
         counts,

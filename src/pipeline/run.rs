@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::fnv::Fnv;
 use crate::scene::Scene;
 use crate::stage::{
-    self, AnyFixed, ChannelFrames, Cx, DynStage, MemImage, Memo, NoMemo, Pool, RunOptions, StageId,
+    self, AnyFixed, ChannelFrames, Cx, DynStage, MemImage, Memo, Pool, RunOptions, StageId,
     StageReport, Taps, Tokens, ms_since,
 };
 use std::sync::Arc;
@@ -73,9 +73,10 @@ pub fn run_lanes(
     last: Option<StageId>,
     pool: &Pool,
 ) -> Result<(Vec<Step>, Vec<Vec<Step>>)> {
+    // Without a stage cache the pool memoises (a run of frames makes its ROMs once).
     let memo: &dyn Memo = match cache {
         Some(c) => c,
-        None => &NoMemo,
+        None => pool,
     };
     let taps = Taps {
         host: Some(plan.host.clone()),

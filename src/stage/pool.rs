@@ -8,7 +8,7 @@
 //! frames (`pipeline::fast::Emulator`) gives the taps of a finished frame back with
 //! [`Pool::recycle`]. A one-shot run uses an empty pool, which only allocates.
 
-use super::Taps;
+use super::{Memo, Taps};
 use std::any::{Any, TypeId};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -16,10 +16,19 @@ use std::sync::{Arc, Mutex};
 /// Buffers kept per element type (the largest are kept when more are given back).
 const KEEP: usize = 24;
 
-/// A pool of buffers by element type (see the module docs).
+/// Memo values kept (the oldest goes when more are made).
+const MEMO_KEEP: usize = 32;
+
+/// A memo value and its key.
+type MemoEntry = (u64, Arc<dyn Any + Send + Sync>);
+
+/// A pool of buffers by element type (see the module docs). It is also the [`Memo`] of a
+/// run without a stage cache: values made from the configuration alone (a LUT's contents)
+/// are made once per run of frames, not once per frame.
 #[derive(Default)]
 pub struct Pool {
     shelves: Mutex<HashMap<TypeId, Vec<Box<dyn Any + Send>>>>,
+    memo: Mutex<Vec<MemoEntry>>,
 }
 
 impl std::fmt::Debug for Pool {
@@ -156,6 +165,7 @@ impl Pool {
             if let Ok(f) = Arc::try_unwrap(a) {
                 // Kept whole: the next frame's raster tasks take their parts back in order.
                 self.give(f.parts);
+                self.give(f.spans);
             }
         }
         for a in samples {
@@ -177,6 +187,27 @@ impl Pool {
                 self.give(p.codes);
             }
         }
+    }
+}
+
+impl Memo for Pool {
+    fn get_or_make(
+        &self,
+        key: u64,
+        make: &mut dyn FnMut() -> Arc<dyn Any + Send + Sync>,
+    ) -> Arc<dyn Any + Send + Sync> {
+        let lock = || self.memo.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, v)) = lock().iter().find(|(k, _)| *k == key) {
+            return v.clone();
+        }
+        // Made outside the lock (a value may take a while, or read the memo itself).
+        let v = make();
+        let mut m = lock();
+        if m.len() >= MEMO_KEEP {
+            m.remove(0);
+        }
+        m.push((key, v.clone()));
+        v
     }
 }
 

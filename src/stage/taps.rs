@@ -195,15 +195,33 @@ pub fn processing_order(is_point: impl Fn(usize) -> bool, n: usize) -> Vec<usize
     order
 }
 
-/// Per-primitive fragment lists, in the order the raster emitted them, held in parts of
-/// consecutive primitives (one per raster task; a float raster writes one part). Two lists
-/// are equal when every primitive's fragments are, however they are split into parts.
+/// Where one primitive's fragments sit in a part of a [`Frags`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Span {
+    /// The primitive (its index in scene order).
+    pub prim: u32,
+    /// First fragment of the part's list.
+    pub a: usize,
+    /// One past its last fragment.
+    pub b: usize,
+}
+
+/// Per-primitive fragment lists, in the order the raster emitted them, held in parts: the
+/// fixed raster writes one part per band of sample rows (every primitive's fragments in
+/// those rows, in primitive order), so each part of the sample buffer reads its own part
+/// alone; the float raster writes one part. A primitive's fragments are its pieces in part
+/// order. Two lists are equal when every primitive's fragments are, however they are split.
 #[derive(Clone, Debug, Default)]
 pub struct Frags<T> {
     /// The fragments, part by part.
     pub parts: Vec<Vec<T>>,
-    /// Per primitive: its part and the range of its fragments in it.
-    pub spans: Vec<(u32, usize, usize)>,
+    /// Per part, in primitive order: the primitives with fragments in it and their ranges.
+    pub spans: Vec<Vec<Span>>,
+    /// Per part: the sample indices its fragments fall in (`start..end`; disjoint and in
+    /// order for row bands, everything for one part).
+    pub bounds: Vec<(usize, usize)>,
+    /// Primitives listed.
+    pub prims: usize,
 }
 
 impl<T> Frags<T> {
@@ -215,18 +233,39 @@ impl<T> Frags<T> {
         for p in 0..n {
             let a = data.len();
             emit(p, &mut data);
-            spans.push((0, a, data.len()));
+            if data.len() > a {
+                spans.push(Span {
+                    prim: p as u32,
+                    a,
+                    b: data.len(),
+                });
+            }
         }
         Self {
             parts: vec![data],
-            spans,
+            spans: vec![spans],
+            bounds: vec![(0, usize::MAX)],
+            prims: n,
         }
     }
 
-    /// Primitive `p`'s fragments.
-    pub fn of(&self, p: usize) -> &[T] {
-        let (k, a, b) = self.spans[p];
-        &self.parts[k as usize][a..b]
+    /// Primitive `p`'s fragments, piece by piece (one piece per part it has fragments in).
+    pub fn of(&self, p: usize) -> impl Iterator<Item = &[T]> + '_ {
+        self.parts
+            .iter()
+            .zip(&self.spans)
+            .filter_map(move |(data, spans)| {
+                let j = spans.partition_point(|s| (s.prim as usize) < p);
+                spans
+                    .get(j)
+                    .filter(|s| s.prim as usize == p)
+                    .map(|s| &data[s.a..s.b])
+            })
+    }
+
+    /// The number of primitive `p`'s fragments.
+    pub fn count(&self, p: usize) -> usize {
+        self.of(p).map(<[T]>::len).sum()
     }
 
     /// Fragments of all primitives.
@@ -242,7 +281,7 @@ impl<T> Frags<T> {
 
 impl<T: PartialEq> PartialEq for Frags<T> {
     fn eq(&self, o: &Self) -> bool {
-        self.spans.len() == o.spans.len() && (0..self.spans.len()).all(|p| self.of(p) == o.of(p))
+        self.prims == o.prims && (0..self.prims).all(|p| self.of(p).flatten().eq(o.of(p).flatten()))
     }
 }
 

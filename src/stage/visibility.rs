@@ -95,7 +95,9 @@ pub fn float_samples(
         .collect();
     for (p, f) in prims.f.iter().enumerate() {
         if !f.is_point() {
-            resolve_f64(frags.of(p), p as u32 + 1, &mut buf, &mut extra);
+            for f in frags.of(p) {
+                resolve_f64(f, p as u32 + 1, &mut buf, &mut extra);
+            }
         }
     }
     let mut points = vec![Vec::new(); channels];
@@ -103,8 +105,9 @@ pub fn float_samples(
         let super::raster::FPrim::Point { v, .. } = f else {
             continue;
         };
-        let vis: Vec<u32> = point_visible_f64(frags.of(p), &buf)
-            .into_iter()
+        let vis: Vec<u32> = frags
+            .of(p)
+            .flat_map(|f| point_visible_f64(f, &buf))
             .map(|v| v.0)
             .collect();
         for (c, pts) in points.iter_mut().enumerate() {
@@ -181,44 +184,56 @@ pub struct Part<'a> {
     extra: Vec<&'a mut [u32]>,
 }
 
-/// Splits the buffer (and the other channels' intensity planes `extra`) into `n` parts of
-/// whole rows, top to bottom.
-pub fn parts<'a>(buf: &'a mut Samples, extra: &'a mut [Vec<u32>], n: usize) -> Vec<Part<'a>> {
-    let width = buf.reg.width().max(1);
-    let rows = buf.z.len() / width;
-    let step = rows.div_ceil(n.max(1)).max(1) * width;
-    let mut z = buf.z.chunks_mut(step);
-    let mut prim = buf.prim.chunks_mut(step);
-    let mut i = buf.i.chunks_mut(step);
-    let mut more: Vec<_> = extra.iter_mut().map(|e| e.chunks_mut(step)).collect();
-    let mut out = Vec::new();
-    while let (Some(z), Some(prim), Some(i)) = (z.next(), prim.next(), i.next()) {
-        let extra = more
-            .iter_mut()
-            .map(|m| m.next().expect("same length"))
-            .collect();
+/// Splits the buffer (and the other channels' intensity planes `extra`) at the ends of the
+/// fragment parts' sample ranges `bounds` (disjoint and in order, as the fixed raster's row
+/// bands are): part `j` holds the samples from the previous range's end to range `j`'s end
+/// (the last part to the end of the buffer).
+pub fn parts<'a>(
+    buf: &'a mut Samples,
+    extra: &'a mut [Vec<u32>],
+    bounds: &[(usize, usize)],
+) -> Vec<Part<'a>> {
+    let n = buf.z.len();
+    let (mut z, mut prim, mut i) = (&mut buf.z[..], &mut buf.prim[..], &mut buf.i[..]);
+    let mut more: Vec<&mut [u32]> = extra.iter_mut().map(|e| &mut e[..]).collect();
+    let mut out = Vec::with_capacity(bounds.len());
+    let mut s0 = 0;
+    for (j, &(_, end)) in bounds.iter().enumerate() {
+        let end = if j + 1 == bounds.len() {
+            n
+        } else {
+            end.clamp(s0, n)
+        };
+        let k = end - s0;
+        let (zh, zt) = std::mem::take(&mut z).split_at_mut(k);
+        let (ph, pt) = std::mem::take(&mut prim).split_at_mut(k);
+        let (ih, it) = std::mem::take(&mut i).split_at_mut(k);
+        let mut heads = Vec::with_capacity(more.len());
+        for m in more.iter_mut() {
+            let (h, t) = std::mem::take(m).split_at_mut(k);
+            heads.push(h);
+            *m = t;
+        }
+        (z, prim, i) = (zt, pt, it);
         out.push(Part {
-            s0: out.len() * step,
-            z,
-            prim,
-            i,
-            extra,
+            s0,
+            z: zh,
+            prim: ph,
+            i: ih,
+            extra: heads,
         });
+        s0 = end;
     }
     out
 }
 
-/// Depth-tests the fragments of surface `prim` that fall in `part` into it (channel 0's
-/// intensity into `i`, channel `c + 1`'s into `extra[c]`); counts the writes and clamps of
-/// those fragments (the tests are the fragments, counted by the caller). The parts of a
-/// buffer see every fragment in the same order, so any split gives the whole buffer's
-/// result.
+/// Depth-tests `frags`, fragments of surface `prim` that fall in `part`, into it (channel
+/// 0's intensity into `i`, channel `c + 1`'s into `extra[c]`); counts the writes and
+/// clamps (the tests are the fragments, counted by the caller).
 pub fn resolve(frags: &[Frag], prim: u32, zc: &ZConvert, part: &mut Part, w: &mut VisWork) {
-    let (s0, n) = (part.s0, part.z.len());
+    let s0 = part.s0;
     for f in frags {
-        let Some(s) = (f.s as usize).checked_sub(s0).filter(|&s| s < n) else {
-            continue;
-        };
+        let s = f.s as usize - s0;
         let z = zc.apply(f.z, &mut w.clamped);
         if z < part.z[s] {
             part.z[s] = z;
@@ -385,24 +400,19 @@ impl Stage for Visibility {
         let n = prims.q.len();
         let surface = |p: usize| !matches!(prims.q[p], QPrim::Point { .. });
         let mut tests: Vec<u64> = (0..n)
-            .map(|p| {
-                if surface(p) {
-                    frags.of(p).len() as u64
-                } else {
-                    0
-                }
-            })
+            .map(|p| if surface(p) { frags.count(p) as u64 } else { 0 })
             .collect();
         w.tests = tests.iter().sum();
-        // Each thread owns whole rows of the buffer and resolves every surface's fragments
-        // in them, in primitive order; the counts are integers summed in part order.
-        let threads = rayon::current_num_threads().max(1);
-        let done: Vec<VisWork> = parts(&mut buf, &mut extra, threads)
+        // The raster's parts are bands of sample rows: each part of the buffer resolves its
+        // own band's fragments, surface by surface in primitive order; the counts are
+        // integers summed in part order.
+        let done: Vec<VisWork> = parts(&mut buf, &mut extra, &frags.bounds)
             .into_par_iter()
-            .map(|mut part| {
+            .zip(frags.parts.par_iter().zip(&frags.spans))
+            .map(|(mut part, (data, spans))| {
                 let mut wk = VisWork::default();
-                for p in (0..n).filter(|&p| surface(p)) {
-                    resolve(frags.of(p), p as u32 + 1, &zc, &mut part, &mut wk);
+                for sp in spans.iter().filter(|sp| surface(sp.prim as usize)) {
+                    resolve(&data[sp.a..sp.b], sp.prim + 1, &zc, &mut part, &mut wk);
                 }
                 wk
             })
@@ -422,7 +432,10 @@ impl Stage for Visibility {
         for (p, q) in prims.q.iter().enumerate() {
             let QPrim::Point { v, .. } = q else { continue };
             let before = w.point_tests;
-            let vis = point_visible(frags.of(p), &zc, &buf, &mut w);
+            let vis: Vec<u32> = frags
+                .of(p)
+                .flat_map(|f| point_visible(f, &zc, &buf, &mut w))
+                .collect();
             tests[p] = w.point_tests - before;
             for (c, pts) in points.iter_mut().enumerate() {
                 pts.push(PointFrags {
@@ -509,7 +522,7 @@ impl Stage for Visibility {
                 continue;
             }
             exact.clear();
-            exact.extend(frags.of(p).iter().map(|x| FragF {
+            exact.extend(frags.of(p).flatten().map(|x| FragF {
                 s: x.s,
                 z: x.z as f64,
                 i: x.i.map(|i| i as f64),

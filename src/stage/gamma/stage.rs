@@ -7,6 +7,7 @@ use super::{GammaLut, GammaSpec, apply_powers, lookup, powers, powers_key};
 use super::{extended_lut, reduced_lut};
 use crate::config::HwConfig;
 use crate::error::Result;
+use crate::fnv::Fnv;
 use crate::scene::Scene;
 use crate::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut};
 use crate::stage::taps::{FrameCoding, PixelTap, PixelTapF, Taps};
@@ -32,6 +33,20 @@ pub enum Lut {
 
 /// The gamma stage.
 pub struct Gamma;
+
+/// The memo key of a LUT's contents: what they are made from (its kind, the exponent, the
+/// DAC quantiser, the address bits and the extra fraction or dropped address bits `f`), so
+/// a run of frames builds its ROM once.
+fn lut_key(kind: &str, spec: &GammaSpec, acc_bits: u32, f: u32) -> u64 {
+    Fnv::new()
+        .str("gamma lut")
+        .str(kind)
+        .u64(spec.exponent.to_bits())
+        .str(&format!("{:?}", spec.dac))
+        .u64(u64::from(acc_bits))
+        .u64(u64::from(f))
+        .finish()
+}
 
 fn frame_bits(hw: &HwConfig) -> (u32, u32) {
     let f = hw.accumulate.frame.format;
@@ -81,12 +96,14 @@ impl Stage for Gamma {
         let dither_before = cx.layout.has(StageId::Dither) && !dither_after;
         let (lut, codes, px_frac): (Lut, Vec<u32>, u32) = if dither_before {
             let f = hw.dither.frac_bits;
-            let lut = reduced_lut(&spec, acc_bits, f);
+            let lut = memo(cx.memo, lut_key("reduced", &spec, acc_bits, f), || {
+                reduced_lut(&spec, acc_bits, f)
+            });
             let addr = &taps.fixed.pixels().codes;
             let mut codes = cx.pool.filled(addr.len(), 0u32);
             lookup(&lut.table, addr, 0, &mut codes);
             facts.note("monotone", lut.is_monotone());
-            (Lut::Reduced(Arc::new(lut), f), codes, 0)
+            (Lut::Reduced(lut, f), codes, 0)
         } else {
             let frame = taps.fixed.frame();
             let acc = &frame.frame.acc;
@@ -101,15 +118,19 @@ impl Stage for Gamma {
                 }
                 FrameCoding::Linear if dither_after => {
                     let f = hw.dither.frac_bits;
-                    let lut = extended_lut(&spec, acc_bits, f);
+                    let lut = memo(cx.memo, lut_key("extended", &spec, acc_bits, f), || {
+                        extended_lut(&spec, acc_bits, f)
+                    });
                     let mut codes = cx.pool.filled(acc.len(), 0u32);
                     lookup(&lut, acc, frac, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
-                    (Lut::Extended(Arc::new(lut), f), codes, f)
+                    (Lut::Extended(lut, f), codes, f)
                 }
                 FrameCoding::Linear => {
-                    let lut = GammaLut::build(&spec, acc_bits);
+                    let lut = memo(cx.memo, lut_key("plain", &spec, acc_bits, 0), || {
+                        GammaLut::build(&spec, acc_bits)
+                    });
                     let mut codes = cx.pool.filled(acc.len(), 0u32);
                     lut.apply_u32(acc, frac, &mut codes);
                     facts.note("monotone", lut.is_monotone());
@@ -119,7 +140,7 @@ impl Stage for Gamma {
                         "first_unreachable",
                         unreachable.iter().take(16).collect::<Vec<_>>(),
                     );
-                    (Lut::Plain(Arc::new(lut)), codes, 0)
+                    (Lut::Plain(lut), codes, 0)
                 }
             }
         };

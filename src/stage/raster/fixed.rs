@@ -100,18 +100,20 @@ pub fn raster_tri(
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
-    raster_tri_rows(t, p, reg, true, out, w);
+    raster_tri_rows(t, p, reg, (reg.k0, reg.k1), true, out, w);
 }
 
-/// [`raster_tri`] on one band of sample rows `reg.k0..reg.k1`: the edges are stepped (adds
-/// only, no samples) through the rows above the band, which count as `rows_walked`, and
-/// their re-seeds as `reseeds`, only when `above` (the first band, or the whole region);
-/// a later band's walk down to its rows repeats what an earlier band counted. The fragments
-/// of the band's rows are exactly those of the whole-region run (same walk, same adds).
+/// [`raster_tri`] on the sample rows `rows.0..rows.1` of `reg` (a band; fragment indices
+/// stay those of `reg`): the edges are stepped (adds only, no samples) through the rows
+/// above the band, which count as `rows_walked`, and their re-seeds as `reseeds`, only when
+/// `above` (the first band, or the whole region); a later band's walk down to its rows
+/// repeats what an earlier band counted. The fragments of the band's rows are exactly those
+/// of the whole-region run (same walk, same adds).
 pub fn raster_tri_rows(
     t: &TriSetup,
     p: &RasterParams,
     reg: &SampleRegion,
+    rows: (i64, i64),
     above: bool,
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
@@ -119,8 +121,8 @@ pub fn raster_tri_rows(
     let g = &p.grid;
     let h2 = 2 * g.h;
     let (mut long, mut upper, mut lower) = (t.long, t.upper, t.lower);
-    let (k_start, k_end) = (long.k0, long.k1.min(reg.k1));
-    if k_start >= k_end || (!above && k_end <= reg.k0) {
+    let (k_start, k_end) = (long.k0, long.k1.min(rows.1));
+    if k_start >= k_end || (!above && k_end <= rows.0) {
         return;
     }
     // Column and row gradients with guard bits (setup-time divisions).
@@ -164,7 +166,7 @@ pub fn raster_tri_rows(
         } else {
             (short.q, long.q)
         };
-        if k >= reg.k0 {
+        if k >= rows.0 {
             let c_start = lq.max(reg.c0);
             let c_end = rq.min(reg.c1);
             if c_start < c_end {
@@ -215,7 +217,7 @@ pub fn raster_tri_rows(
             // The left edge changes at the middle vertex: re-seed (a setup operation).
             (vi, vz) = seed(&lower, k);
             interp = EdgeInterp::new(&lower, &di, dz);
-            if above || k >= reg.k0 {
+            if above || k >= rows.0 {
                 w.reseeds += 1;
             }
         } else {
@@ -238,11 +240,12 @@ pub fn raster_point(
     pt: &PointSetup,
     p: &RasterParams,
     reg: &SampleRegion,
+    rows: (i64, i64),
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
     let (c0, c1) = (pt.c.0.max(reg.c0), pt.c.1.min(reg.c1));
-    let (k0, k1) = (pt.k.0.max(reg.k0), pt.k.1.min(reg.k1));
+    let (k0, k1) = (pt.k.0.max(rows.0), pt.k.1.min(rows.1));
     if c0 >= c1 || k0 >= k1 {
         return;
     }
@@ -269,25 +272,27 @@ pub fn raster(
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
-    raster_rows(s, p, reg, true, out, w);
+    raster_rows(s, p, reg, (reg.k0, reg.k1), true, out, w);
 }
 
-/// [`raster`] on one band of sample rows (see [`raster_tri_rows`] for `above`).
+/// [`raster`] on the sample rows `rows.0..rows.1` of `reg` (see [`raster_tri_rows`] for
+/// `above`); the fragment indices are those of `reg`.
 pub fn raster_rows(
     s: &Setup,
     p: &RasterParams,
     reg: &SampleRegion,
+    rows: (i64, i64),
     above: bool,
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
     match s {
-        Setup::Tri(t) => raster_tri_rows(t, p, reg, above, out, w),
+        Setup::Tri(t) => raster_tri_rows(t, p, reg, rows, above, out, w),
         Setup::Line(a, b) => {
-            raster_tri_rows(a, p, reg, above, out, w);
-            raster_tri_rows(b, p, reg, above, out, w);
+            raster_tri_rows(a, p, reg, rows, above, out, w);
+            raster_tri_rows(b, p, reg, rows, above, out, w);
         }
-        Setup::Point(pt) => raster_point(pt, p, reg, out, w),
+        Setup::Point(pt) => raster_point(pt, p, reg, rows, out, w),
         Setup::Degenerate => {}
     }
 }

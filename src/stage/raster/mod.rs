@@ -15,7 +15,7 @@ pub use float::{FPrim, FVertex, raster_f64, raster_tri_f64};
 
 pub use super::SampleRegion;
 use super::input::QPrim;
-use super::taps::{Frags, Taps, processing_order};
+use super::taps::{Frags, Span, Taps, processing_order};
 use super::{
     Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, TokenKind, Tokens, Unit,
 };
@@ -105,6 +105,24 @@ fn compare_frags(
     }
 }
 
+/// The bands of sample rows the fixed raster writes its parts in: about 64 sample rows
+/// each, at most 16, a count that depends on the region alone (so the fragment lists and
+/// every count are the same on any thread count).
+fn band_rows(reg: &SampleRegion) -> Vec<(i64, i64)> {
+    let h = reg.k1 - reg.k0;
+    let n = (h / 64).clamp(1, 16);
+    (0..n)
+        .map(|j| (reg.k0 + h * j / n, reg.k0 + h * (j + 1) / n))
+        .collect()
+}
+
+/// The sample indices of the rows `rows` of `reg`.
+fn sample_range(reg: &SampleRegion, rows: (i64, i64)) -> (usize, usize) {
+    let w = reg.width();
+    let at = |k: i64| (k - reg.k0).max(0) as usize * w;
+    (at(rows.0), at(rows.1))
+}
+
 /// The raster stage.
 pub struct Raster;
 
@@ -138,45 +156,57 @@ impl Stage for Raster {
         let mut w = RasterWork::default();
         // A banded run's later bands do not count the walk above their rows again.
         let above = cx.layout.band.is_none_or(|b| b.first);
-        // Parts of consecutive primitives, one task each (the fragments, counts and tokens
-        // are those of one pass in primitive order: integers, concatenated in part order).
-        let tasks = 4 * rayon::current_num_threads().max(1);
-        let chunk = if setups.len() < 64 * tasks {
-            setups.len().max(1)
-        } else {
-            setups.len().div_ceil(tasks)
-        };
+        // One part per band of sample rows (a fixed count, whatever the threads): each band
+        // walks every primitive in scene order and keeps the fragments of its rows, so the
+        // parts are disjoint ranges of the sample buffer and visibility reads each fragment
+        // once. The counts and tokens are integers summed in band order.
+        let bands = band_rows(&reg);
+        let n = setups.len();
         // Last frame's parts, whose sizes fit the same scene's.
         let mut bufs: Vec<Vec<Frag>> = cx.pool.reuse();
-        bufs.resize_with(setups.len().div_ceil(chunk).max(1), Vec::new);
-        let done: Vec<_> = setups
-            .par_chunks(chunk)
-            .zip(bufs.par_iter_mut())
-            .map(|(ss, data)| {
-                let mut data = std::mem::take(data);
+        let mut span_bufs: Vec<Vec<Span>> = cx.pool.reuse();
+        bufs.resize_with(bands.len(), Vec::new);
+        span_bufs.resize_with(bands.len(), Vec::new);
+        let done: Vec<_> = bands
+            .par_iter()
+            .zip(bufs.par_iter_mut().zip(span_bufs.par_iter_mut()))
+            .enumerate()
+            .map(|(b, (&rows, (data, spans)))| {
+                let (mut data, mut spans) = (std::mem::take(data), std::mem::take(spans));
                 data.clear();
+                spans.clear();
                 let mut w = RasterWork::default();
-                let mut spans = Vec::with_capacity(ss.len());
-                let mut stepped = Vec::with_capacity(ss.len());
-                for s in ss {
+                let mut stepped: Vec<(u32, u64)> = Vec::new();
+                for (q, s) in setups.iter().enumerate() {
                     let (a, before) = (data.len(), w.samples + w.walked);
-                    raster_rows(s, &p, &reg, above, &mut data, &mut w);
-                    spans.push((a, data.len()));
-                    stepped.push(w.samples + w.walked - before);
+                    raster_rows(s, &p, &reg, rows, above && b == 0, &mut data, &mut w);
+                    if data.len() > a {
+                        spans.push(Span {
+                            prim: q as u32,
+                            a,
+                            b: data.len(),
+                        });
+                    }
+                    if w.samples + w.walked > before {
+                        stepped.push((q as u32, w.samples + w.walked - before));
+                    }
                 }
                 (data, spans, stepped, w)
             })
             .collect();
         let mut out = Frags {
             parts: Vec::with_capacity(done.len()),
-            spans: Vec::with_capacity(setups.len()),
+            spans: Vec::with_capacity(done.len()),
+            bounds: bands.iter().map(|r| sample_range(&reg, *r)).collect(),
+            prims: n,
         };
-        let mut stepped = Vec::with_capacity(setups.len());
-        for (k, (data, spans, st, wk)) in done.into_iter().enumerate() {
+        let mut stepped = vec![0u64; n];
+        for (data, spans, st, wk) in done {
             out.parts.push(data);
-            out.spans
-                .extend(spans.into_iter().map(|(a, b)| (k as u32, a, b)));
-            stepped.extend(st);
+            out.spans.push(spans);
+            for (q, k) in st {
+                stepped[q as usize] += k;
+            }
             w.add(&wk);
         }
         let prims = &taps.fixed.prims().q;
@@ -229,7 +259,7 @@ impl Stage for Raster {
                 continue;
             }
             fx.clear();
-            fx.extend_from_slice(frags.of(p));
+            frags.of(p).for_each(|f| fx.extend_from_slice(f));
             fl.clear();
             raster_f64(&FPrim::from_q(q, grid.sub_bits), &grid, &reg, &mut fl);
             // A line is two triangles: sort both lists so they merge by sample.
