@@ -556,13 +556,19 @@ fn bad_cycle_fields_name_the_field_and_range() {
     let e = HwConfig::from_toml(&TomlFile::from_text("hw.toml", "[cycles.dof]\nlanes = 0\n"))
         .unwrap_err();
     assert_eq!(e.field, "cycles.dof.lanes", "{e}");
-    // A stage without a cycle model has no timing section.
-    let e = HwConfig::from_toml(&TomlFile::from_text(
+    // Every stage has a timing section (the dither's too); a name that is no stage is refused.
+    let d = HwConfig::from_toml(&TomlFile::from_text(
         "hw.toml",
         "[cycles.dither]\nlanes = 2\n",
     ))
+    .unwrap();
+    assert_eq!(d.cycles.dither.lanes, 2);
+    let e = HwConfig::from_toml(&TomlFile::from_text(
+        "hw.toml",
+        "[cycles.display]\nlanes = 2\n",
+    ))
     .unwrap_err();
-    assert!(e.to_string().contains("dither"), "{e}");
+    assert!(e.to_string().contains("display"), "{e}");
     let ok = HwConfig::from_toml(&TomlFile::from_text(
         "hw.toml",
         "[cycles]\nclock_mhz = 50.0\n[cycles.raster]\nlanes = 8\nfifo = 3\n",
@@ -749,4 +755,76 @@ fn a_workload_that_cannot_finish_ends() {
     assert_eq!(r.stages[1].busy, c.raster.service(5));
     assert!(r.stages[1].starved > 0);
     assert_eq!(r.total_cycles, r.stages[1].busy + r.stages[1].starved);
+}
+
+/// Every planned stage has a cycle model: a log-coded render with Floyd-Steinberg times the
+/// log encoder (one code per depth test, chained behind visibility per primitive) and the
+/// error diffusion (one token per row, its pixels one after another); an ordered dither
+/// without depth of field follows gamma tile by tile through a FIFO. (A log-add frame takes
+/// no dither: the hardware file is refused, so the log coding here is log-potentiate.)
+#[test]
+fn logdomain_and_dither_have_cycle_models() {
+    let s = Scene::embedded("default-pinhole").expect("embedded");
+    let mut h = HwConfig::preset("log8-potentiate").expect("preset");
+    h.dither.kind = igemu::config::DitherKind::FloydSteinberg;
+    let r = run(&s, &h);
+    let c = &r.report.cycles;
+    assert!(c.plan.unmodelled.is_empty(), "{:?}", c.plan.unmodelled);
+    let chain = |id: StageId| {
+        r.workload
+            .stages
+            .iter()
+            .position(|s| s.id == id)
+            .unwrap_or_else(|| panic!("{id:?} in the chains"))
+    };
+    let (vis, log, dith) = (
+        chain(StageId::Visibility),
+        chain(StageId::Logdomain),
+        chain(StageId::Dither),
+    );
+    let w = &r.workload.stages;
+    // The encoder: behind visibility, one token per primitive, one code per depth test of a
+    // surface and one per light point.
+    assert_eq!(w[log].feeder, Some(vis));
+    assert_eq!(w[log].kind, TokenKind::Primitive);
+    let codes: u64 = w[log].items.iter().sum();
+    assert_eq!(
+        codes,
+        work(&r, "visibility", "tests") + (w[log].items.len() as u64 - w[vis].items.len() as u64)
+    );
+    assert_eq!(w[log].items.len(), w[vis].items.len());
+    let st = |n: &str| c.stages.iter().find(|x| x.name == n).unwrap().clone();
+    assert!(st("logdomain").busy > 0);
+    // Error diffusion: raster order, one row per token; after tile-ordered gamma it waits
+    // for the whole frame.
+    assert_eq!(w[dith].kind, TokenKind::Row);
+    assert_eq!(w[dith].items, vec![640u64; 480]);
+    assert_eq!(w[dith].feeder, None);
+    let d = st("dither");
+    assert_eq!(d.busy, 640 * 480);
+    assert!(d.starved >= st("gamma").busy, "{d:?}");
+    // A slower loop (two clocks per pixel) doubles the dither's busy cycles.
+    h.cycles.dither.ii = 2;
+    let r2 = run(&s, &h);
+    let d2 = r2
+        .report
+        .cycles
+        .stages
+        .iter()
+        .find(|x| x.name == "dither")
+        .unwrap();
+    assert_eq!(d2.busy, 2 * 640 * 480);
+    // An ordered dither without depth of field: one token per binned tile behind gamma.
+    let mut o = HwConfig::default_config();
+    o.dither.kind = igemu::config::DitherKind::Bayer8;
+    let ro = run(&s, &o);
+    assert!(ro.report.cycles.plan.unmodelled.is_empty());
+    let wo = &ro.workload.stages;
+    let (g, d) = (
+        wo.iter().position(|s| s.id == StageId::Gamma).unwrap(),
+        wo.iter().position(|s| s.id == StageId::Dither).unwrap(),
+    );
+    assert_eq!(wo[d].kind, TokenKind::Tile);
+    assert_eq!(wo[d].feeder, Some(g));
+    assert_eq!(wo[d].items, wo[g].items);
 }

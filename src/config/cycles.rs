@@ -66,23 +66,31 @@ pub struct CyclesCfg {
     pub raster: StageTiming,
     /// Visibility (items: depth tests).
     pub visibility: StageTiming,
+    /// Log coding: the encoder on the sample buffer's write port (items: codes, one per
+    /// depth test and one per light point).
+    pub logdomain: StageTiming,
     /// Accumulate (items: MACs).
     pub accumulate: StageTiming,
     /// Depth of field (items: output samples of the two 1-D passes).
     pub dof: StageTiming,
     /// Gamma (items: pixels).
     pub gamma: StageTiming,
+    /// Dither (items: pixels; error diffusion runs each row's pixels one after another,
+    /// `lanes` rows in flight).
+    pub dither: StageTiming,
 }
 
 /// The stages with a `[cycles.<stage>]` timing table, in flow order.
-pub const TIMED: [StageId; 7] = [
+pub const TIMED: [StageId; 9] = [
     StageId::Input,
     StageId::Setup,
     StageId::Raster,
     StageId::Visibility,
+    StageId::Logdomain,
     StageId::Accumulate,
     StageId::Dof,
     StageId::Gamma,
+    StageId::Dither,
 ];
 
 impl CyclesCfg {
@@ -90,7 +98,9 @@ impl CyclesCfg {
     /// primitive every 4 clocks), 4 samples per clock in raster and visibility, 16 MACs per
     /// clock in the filter, a tap-parallel depth-of-field row MAC per pass (two output
     /// samples per clock: one horizontal, one vertical, as `dof_row_mac`), one pixel per clock
-    /// through the gamma LUT, and a frame-memory port of four frame words per clock.
+    /// through the gamma LUT and the dither, a log encoder per depth-test lane (a threshold
+    /// ROM searched in a 2-stage pipeline), and a frame-memory port of four frame words per
+    /// clock.
     pub fn default_for(frame_int_bits: u32) -> Self {
         Self {
             clock_mhz: 100.0,
@@ -100,13 +110,16 @@ impl CyclesCfg {
             setup: StageTiming::new(1, 16, 4, 16),
             raster: StageTiming::new(4, 4, 1, 64),
             visibility: StageTiming::new(4, 3, 1, 64),
+            logdomain: StageTiming::new(4, 2, 1, 64),
             accumulate: StageTiming::new(16, 6, 1, 4),
             dof: StageTiming::new(2, 8, 1, 4),
             gamma: StageTiming::new(1, 2, 1, 4),
+            dither: StageTiming::new(1, 1, 1, 4),
         }
     }
 
-    /// The timing of a stage (`None`: the stage has no cycle model).
+    /// The timing of a stage (every stage has one; `Option` for the callers that also
+    /// handle a stage without tokens).
     pub fn timing(&self, id: StageId) -> Option<&StageTiming> {
         Some(match id {
             StageId::Input => &self.input,
@@ -116,7 +129,8 @@ impl CyclesCfg {
             StageId::Accumulate => &self.accumulate,
             StageId::Dof => &self.dof,
             StageId::Gamma => &self.gamma,
-            StageId::Logdomain | StageId::Dither => return None,
+            StageId::Logdomain => &self.logdomain,
+            StageId::Dither => &self.dither,
         })
     }
 
@@ -130,7 +144,8 @@ impl CyclesCfg {
             StageId::Accumulate => &mut self.accumulate,
             StageId::Dof => &mut self.dof,
             StageId::Gamma => &mut self.gamma,
-            StageId::Logdomain | StageId::Dither => return None,
+            StageId::Logdomain => &mut self.logdomain,
+            StageId::Dither => &mut self.dither,
         })
     }
 
@@ -203,9 +218,11 @@ pub(super) struct RawCycles {
     setup: Option<RawTiming>,
     raster: Option<RawTiming>,
     visibility: Option<RawTiming>,
+    logdomain: Option<RawTiming>,
     accumulate: Option<RawTiming>,
     dof: Option<RawTiming>,
     gamma: Option<RawTiming>,
+    dither: Option<RawTiming>,
 }
 
 #[derive(Deserialize)]
@@ -228,9 +245,11 @@ impl RawCycles {
             (StageId::Setup, self.setup),
             (StageId::Raster, self.raster),
             (StageId::Visibility, self.visibility),
+            (StageId::Logdomain, self.logdomain),
             (StageId::Accumulate, self.accumulate),
             (StageId::Dof, self.dof),
             (StageId::Gamma, self.gamma),
+            (StageId::Dither, self.dither),
         ] {
             if let (Some(r), Some(t)) = (raw, c.timing_mut(id)) {
                 set(&mut t.lanes, r.lanes);

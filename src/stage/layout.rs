@@ -330,6 +330,23 @@ pub struct Band {
 }
 
 impl Layout {
+    /// The pixel tokens of a post stage (gamma, dither): one per screen row of `width`
+    /// pixels when `rows` (after depth of field, which writes the frame row by row, or a
+    /// kernel that runs in raster order), else one per binned tile with its pixels inside
+    /// the region.
+    pub fn pixel_tokens(&self, rows: bool) -> (super::TokenKind, Vec<u64>) {
+        if rows {
+            let (w, h) = (self.grid.width as u64, self.grid.height as usize);
+            (super::TokenKind::Row, vec![w; h])
+        } else {
+            let t = &self.tiles;
+            (
+                super::TokenKind::Tile,
+                t.binned_in(&self.region).map(|(_, r)| r.pixels()).collect(),
+            )
+        }
+    }
+
     /// Whether the plan runs `id`.
     pub fn has(&self, id: StageId) -> bool {
         self.order.contains(&id)

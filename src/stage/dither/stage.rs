@@ -141,8 +141,18 @@ impl Stage for DitherStage {
         Some(e.finish())
     }
 
-    fn tokens(&self, _: &Cx, _: &Dithered) -> Option<Tokens> {
-        None
+    /// One token per pixel row after depth of field (as gamma) and for error diffusion,
+    /// whose row runs left to right (each pixel waits for its left neighbour's error; the
+    /// `lanes` of `[cycles.dither]` are rows in flight), else one per binned tile.
+    fn tokens(&self, cx: &Cx, x: &Dithered) -> Option<Tokens> {
+        let rows = cx.layout.has(StageId::Dof) || x.d.mask.is_none();
+        let (kind, items) = cx.layout.pixel_tokens(rows);
+        Some(Tokens {
+            kind,
+            item: "pixels",
+            items,
+            port_bits: vec![],
+        })
     }
 
     fn cost(&self, cx: &Cx, x: &Dithered) -> Cost {

@@ -12,8 +12,7 @@ use crate::scene::Scene;
 use crate::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut};
 use crate::stage::taps::{FrameCoding, PixelTap, PixelTapF, Taps};
 use crate::stage::{
-    Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, Stage, StageId, TokenKind, Tokens,
-    Unit, memo,
+    Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, Stage, StageId, Tokens, Unit, memo,
 };
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -244,17 +243,7 @@ impl Stage for Gamma {
     /// One token per binned tile (the pixels of the region in it); after depth of field,
     /// one per screen row (the layers blur and composite over the whole screen).
     fn tokens(&self, cx: &Cx, _: &Lut) -> Option<Tokens> {
-        let l = cx.layout;
-        let (kind, items) = if l.has(StageId::Dof) {
-            let (w, h) = (l.grid.width as u64, l.grid.height as u64);
-            (TokenKind::Row, vec![w; h as usize])
-        } else {
-            let t = &l.tiles;
-            (
-                TokenKind::Tile,
-                t.binned_in(&l.region).map(|(_, r)| r.pixels()).collect(),
-            )
-        };
+        let (kind, items) = cx.layout.pixel_tokens(cx.layout.has(StageId::Dof));
         Some(Tokens {
             kind,
             item: "pixels",

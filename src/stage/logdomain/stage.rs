@@ -8,9 +8,12 @@ use super::{LogCode, LogEncoder, PotentiationLut, check_contrast};
 use crate::config::{CodingKind, HwConfig};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::stage::taps::{SampleCoding, SampleTap, Taps};
+use crate::stage::input::QPrim;
+use crate::stage::taps::{SampleCoding, SampleTap, Taps, processing_order};
 use crate::stage::visibility::{SAMPLE_BUFFER, sample_buffer, sample_image};
-use crate::stage::{Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, Tokens};
+use crate::stage::{
+    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, TokenKind, Tokens,
+};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -34,6 +37,10 @@ pub struct Encoded {
     /// The colour lane (0 for grey): lanes after R store only their code in the shared
     /// sample buffer word.
     lane: usize,
+    /// Codes encoded per primitive, in processing order: one per depth test of a surface
+    /// (the encoder sits on the sample buffer's write port, beside each test lane), one per
+    /// light point (its intensity, encoded once).
+    codes: Vec<u64>,
 }
 
 /// The logdomain stage.
@@ -155,14 +162,27 @@ impl Stage for Logdomain {
         );
         facts.work = vec![("encoded", encoded), ("potentiations", potentiations)];
         taps.fixed.samples = Some(out);
-        let prims = taps.fixed.prims().q.len();
+        let q = &taps.fixed.prims().q;
+        let is_point = |p: usize| matches!(q[p], QPrim::Point { .. });
+        let frags = taps.fixed.frags();
+        let codes = processing_order(is_point, q.len())
+            .into_iter()
+            .map(|p| {
+                if is_point(p) {
+                    1
+                } else {
+                    frags.count(p) as u64
+                }
+            })
+            .collect();
         Ok((
             Encoded {
                 enc,
                 lut,
                 stored,
-                prims,
+                prims: q.len(),
                 lane: taps.lane,
+                codes,
             },
             facts,
         ))
@@ -206,8 +226,13 @@ impl Stage for Logdomain {
         Some(err.finish())
     }
 
-    fn tokens(&self, _: &Cx, _: &Encoded) -> Option<Tokens> {
-        None
+    fn tokens(&self, _: &Cx, e: &Encoded) -> Option<Tokens> {
+        Some(Tokens {
+            kind: TokenKind::Primitive,
+            item: "codes",
+            items: e.codes.clone(),
+            port_bits: vec![],
+        })
     }
 
     /// The encoder (threshold ROM and comparator), the potentiation LUT (structure a) and the
