@@ -23,11 +23,19 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
             "the accumulate model is the linear MAC (acc_mac.v); log-add sums with the log adder, whose model is --stage logdomain".into(),
         ));
     }
+    let kernel = crate::stage::accumulate::kernel(hw);
+    if kernel.signed() {
+        return Err(super::bad(
+            hw,
+            "accumulate.filter",
+            "acc_mac.v takes unsigned weights; a filter with negative lobes has no bench yet"
+                .into(),
+        ));
+    }
     let frame = hw.accumulate.frame;
     let acc_bits = frame.format.total_bits();
     let (_, input) = src.through(StageId::Input)?;
     let ch = src.channel;
-    let kernel = crate::stage::accumulate::kernel(hw);
     let bg = input.fixed.prims().bg;
     let i_fmt = hw.input.intensity.format;
     let ap = AccParams {
@@ -46,7 +54,15 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
         Overflow::SatZero => 2,
         _ => 1,
     };
-    let wb = 32 - kernel.w.iter().max().copied().unwrap_or(1).leading_zeros();
+    let wb = 32
+        - kernel
+            .w
+            .iter()
+            .max()
+            .copied()
+            .unwrap_or(1)
+            .unsigned_abs()
+            .leading_zeros();
     let wb = wb.max(kernel.f + 1);
     let ib = i_fmt.total_bits();
     b.params = vec![
@@ -59,13 +75,13 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
     ];
     b.fields = vec!["w", "i", "acc_in", "acc_out", "ovf"];
     let one = |w: u32, i: u32, a: u32| {
-        let (c, o) = ap.mac_code(a as i64, w, i);
+        let (c, o) = ap.mac_code(a as i64, w as i32, i);
         vec![w as u64, i as u64, a as u64, c as u64, o as u64]
     };
     // Scene taps: the kernel's weights, the scene's vertex intensity codes and
     // the rendered frame codes as the running sum.
     let taps = src.frame(TAPS)?;
-    let ws: Vec<u32> = kernel.w.clone();
+    let ws: Vec<u32> = kernel.w.iter().map(|&v| v as u32).collect();
     let is: Vec<u32> = input
         .fixed
         .prims()
