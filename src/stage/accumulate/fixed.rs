@@ -149,11 +149,26 @@ impl AccParams {
 
     /// One `w * I` term rounded to the frame format and added to `acc` with the overflow
     /// mode, as the HDL model `hdl-models/rtl/acc_mac.v` computes it: `(code, overflowed)`
-    /// (the `ERROR` mode gives the saturated code and the flag instead of an error).
+    /// (the `ERROR` mode gives the saturated code and the flag instead of an error). For a
+    /// signed kernel the sum is the signed accumulator's ([`Kernel::accumulator`]).
     pub fn mac_code(&self, acc: i64, w: i32, i: u32) -> (i64, bool) {
         let mut st = SignalStats::new("mac", self.frame.format);
         let part = self.product(w as i64 * i as i64, &mut st);
-        let q = self.frame.handle_overflow(acc as i128 + part as i128);
+        let q = self
+            .kernel
+            .accumulator(&self.frame)
+            .unwrap_or(self.frame)
+            .handle_overflow(acc as i128 + part as i128);
+        (q.code, q.overflow)
+    }
+
+    /// A signed kernel's accumulator `acc` clamped to the frame word with its overflow mode,
+    /// as `acc_mac.v`'s `clamp_out` and `clamp_ovf`; `(acc, false)` for an unsigned kernel.
+    pub fn clamp_code(&self, acc: i64) -> (i64, bool) {
+        if !self.kernel.signed() {
+            return (acc, false);
+        }
+        let q = self.frame.handle_overflow(acc as i128);
         (q.code, q.overflow)
     }
 
