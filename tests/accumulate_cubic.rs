@@ -318,3 +318,57 @@ fn log_add_refuses_negative_lobes() {
     h.accumulate.filter = FilterKind::CubicBspline;
     assert!(h.validate().is_ok());
 }
+
+/// `igemu render --hw <file with a cubic filter>` on every embedded scene: exit 0, the
+/// accumulate stage's error, cost and cycles in the report; bad values exit 2 naming the field.
+#[test]
+fn render_runs_on_the_embedded_scenes_and_bad_values_are_named() {
+    let dir = std::env::temp_dir().join(format!("igemu-cubic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_string_lossy().into_owned()
+    };
+    let hw = file(
+        "mitchell.toml",
+        "preset = \"linear12\"\n[accumulate]\nfilter = \"mitchell\"\nmitchell = { b = 0.5, c = 0.25 }\n",
+    );
+    let png = dir.join("out.png").to_string_lossy().into_owned();
+    for scene in ["default", "cone-focus", "default-colour"] {
+        let (code, out, err) = common::igemu(&["render", scene, "--hw", &hw, "-o", &png, "--json"]);
+        assert_eq!(code, 0, "{scene}: {err}");
+        let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let st = r["stages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["name"] == "accumulate")
+            .unwrap()
+            .clone();
+        assert!(
+            st["local"]["max_abs_lsb"].as_f64().unwrap() > 0.0,
+            "{scene}"
+        );
+        assert!(st["cost"]["storage_bits"].as_u64().unwrap() > 0, "{scene}");
+        assert!(st["work"]["macs"].as_u64().unwrap() > 0, "{scene}");
+        assert!(r["cycles"]["total_cycles"].as_u64().unwrap() > 0, "{scene}");
+    }
+    for (text, field) in [
+        (
+            "[accumulate]\nfilter = \"mitchell\"\nmitchell = { b = 1.5, c = 0.2 }\n",
+            "accumulate.mitchell.b",
+        ),
+        ("[accumulate]\nfilter = \"lanczos2\"\n", "accumulate.filter"),
+        (
+            "preset = \"log8-logadd\"\n[accumulate]\nfilter = \"catmull_rom\"\n",
+            "accumulate.filter",
+        ),
+    ] {
+        let bad = file("bad.toml", text);
+        let (code, _, err) = common::igemu(&["render", "--hw", &bad, "-o", &png]);
+        assert_eq!(code, 2, "{text}");
+        assert!(err.contains(field) && err.contains("bad.toml:"), "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
