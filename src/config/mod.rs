@@ -39,7 +39,7 @@ pub use dof::{
     AlphaNorm, DOF_BITS, DofCfg, DofKernel, DofKind, DownsampleCfg, LuminanceCfg,
     MAX_HALF_SIZE_LIMIT, SIGMA_ROM_BITS, SigmaForm,
 };
-pub use dof::{DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, LeakGuard};
+pub use dof::{DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, LeakGuard, Reconstruction};
 pub use gamma::{DAC_BITS, GammaCfg, MAX_GAMMA};
 pub use input::InputCfg;
 pub use presets::PRESETS;
