@@ -372,3 +372,31 @@ fn render_runs_on_the_embedded_scenes_and_bad_values_are_named() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The signed weight ROM (two's complement in `rom_bits`) and the frame memory at the
+/// accumulator's width pack into the bits the cost model charges.
+#[test]
+fn signed_weight_rom_and_frame_memory_pack() {
+    let s = scene(16, 16, 0.2, &point(8.0, 8.0, 0.5, 0.5, 1.0));
+    for f in CUBICS {
+        let h = cubic_hw(f, 4, |_| {});
+        let r = render(&s, &h, RunOptions::default()).expect("render");
+        let st = r
+            .steps
+            .iter()
+            .find(|s| s.id == igemu::stage::StageId::Accumulate)
+            .unwrap();
+        let packs = &st.outcome.packs;
+        assert!(packs.iter().any(|p| p.name == "filter weight ROM"), "{f:?}");
+        assert!(packs.iter().all(|p| p.verified), "{f:?}: {packs:?}");
+        let rom = st
+            .outcome
+            .report
+            .cost
+            .memories
+            .iter()
+            .find(|m| m.name == "filter weight ROM")
+            .unwrap();
+        assert_eq!(rom.width, kernel(&h).rom_bits(), "{f:?}");
+    }
+}

@@ -54,9 +54,11 @@ pub(super) fn has_avx2() -> bool {
 
 /// Computes the span's pixels into `out` (pushed in order).
 pub(super) fn run(sp: &Span, sc: &mut Scratch, dst: Dst, out: &mut RowOut, b: Build) -> Result<()> {
+    // A signed kernel's sums are read back as signed from the `u64` word only.
+    let narrow = b.narrow && !sp.p.kernel.signed();
     macro_rules! go {
         ($n:literal, $b:literal) => {
-            if b.narrow {
+            if narrow {
                 build::<$n, $b, u32>(sp, sc, dst, out, b.avx2)
             } else {
                 build::<$n, $b, u64>(sp, sc, dst, out, b.avx2)
