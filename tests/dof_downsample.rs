@@ -532,3 +532,64 @@ fn bad_downsample_fields_name_file_field_and_range() {
         assert!(msg.contains(range), "{line}: {msg}");
     }
 }
+
+/// The cubic reconstructions (`dof.downsample.reconstruction`): flat fields stay bit
+/// identical (each axis's four weights sum to exactly `2^bilinear_bits`), fixed against
+/// float within the bilinear read's bound on the smooth frame, 16 texels per blurred sample
+/// in the MACs, and on both scenes the local comparison, the weight ROM image and its pack
+/// check; bilinear stays the default.
+#[test]
+fn cubic_reconstructions() {
+    use igemu::config::Reconstruction;
+    assert_eq!(params().downsample.reconstruction, Reconstruction::Bilinear);
+    let mut rng = Rng::new(0xc0b1c);
+    let smooth_img = smooth(96, 64);
+    // The largest |fixed - float| on the smooth frame and the MACs.
+    let smooth_run = |p: &DofCfg| {
+        let plan = smooth_img.plan(p);
+        let (out, work) = downsample_fixed(&smooth_img.v, &smooth_img.k, &plan, p, FRAME).unwrap();
+        let fl = smooth_img.float(p);
+        let max = out
+            .iter()
+            .zip(&fl)
+            .fold(0.0f64, |m, (&o, &f)| m.max((o as f64 - f).abs()));
+        (max, work.macs)
+    };
+    let bilinear = smooth_run(&params());
+    for r in [
+        Reconstruction::CubicBspline,
+        Reconstruction::CatmullRom,
+        Reconstruction::Mitchell,
+    ] {
+        let mut p = params();
+        p.downsample.reconstruction = r;
+        for &v in &[0u32, 1, 2047, 4095] {
+            let mut img = Img::new(37, 23, v, 0);
+            random_depths(&mut rng, &mut img, 3);
+            assert!(img.fixed(&p).iter().all(|&o| o == v), "{r:?} code {v}");
+            assert!(img.float(&p).iter().all(|&o| (o - v as f64).abs() < 1e-9));
+        }
+        let (max, macs) = smooth_run(&p);
+        eprintln!(
+            "{r:?}: smooth frame fixed vs float max {max:.3} LSB (bilinear {:.3}); MACs {macs} (bilinear {})",
+            bilinear.0, bilinear.1
+        );
+        assert!(max <= bilinear.0 + 1.0, "{r:?}: {max}");
+        assert!(macs > bilinear.1, "{r:?}: 16 texels");
+        // Through the pipeline: the ROM is charged, imaged and packs.
+        let mut hw = HwConfig::default_config();
+        hw.dof = p.clone();
+        let s = Scene::embedded("cone-focus").unwrap();
+        let rr = igemu::pipeline::render(&s, &hw, RunOptions::default()).unwrap();
+        let step = rr.steps.iter().find(|s| s.id == StageId::Dof).unwrap();
+        let o = &step.outcome;
+        assert!(
+            o.images
+                .iter()
+                .any(|i| i.name == "dof down reconstruction ROM")
+        );
+        assert!(o.packs.iter().all(|p| p.verified), "{r:?}");
+        let local = o.report.local.as_ref().unwrap();
+        assert!(local.identical as f64 / local.values as f64 > 0.9, "{r:?}");
+    }
+}

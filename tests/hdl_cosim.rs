@@ -9,7 +9,7 @@ mod common;
 
 use common::{hw, scene, tri};
 use igemu::config::HwConfig;
-use igemu::config::{DitherKind, DofKind};
+use igemu::config::{DitherKind, DofKind, FilterKind};
 use igemu::fixed::{Overflow, QFormat, Quant};
 use igemu::hdl::verilator::Sim;
 use igemu::hdl::{self, Bench, Verdict, exhaustive};
@@ -192,6 +192,62 @@ fn accumulate_mac_agrees_at_three_settings() {
     // Some vectors overflow (the edge cases), so the overflow path is exercised.
     let b = hdl::vectors(StageId::Accumulate, &sc, &cfgs[0].1).expect("bench");
     assert!(b.vectors.iter().any(|v| v[4] == 1));
+    agree(StageId::Accumulate, &cfgs, &sc);
+}
+
+/// The signed MAC of the cubic filters with negative lobes: two's-complement weights, the
+/// signed accumulator and its clamp to the frame word, at four settings of rounding and
+/// overflow (every mode that differs for negative values among them).
+#[test]
+fn signed_accumulate_mac_agrees_with_catmull_rom_and_mitchell() {
+    let sc = small_scene();
+    let cubic = |f: FilterKind, q: Quant, o: Overflow| {
+        hw("linear12", |h| {
+            h.accumulate.filter = f;
+            h.accumulate.frame.quant = q;
+            h.accumulate.frame.overflow = o;
+        })
+    };
+    let cfgs = [
+        (
+            "catmull-rom",
+            cubic(FilterKind::CatmullRom, Quant::RndConv, Overflow::Sat),
+        ),
+        (
+            "catmull-rom-trnzero-wrap",
+            cubic(FilterKind::CatmullRom, Quant::TrnZero, Overflow::Wrap),
+        ),
+        (
+            "mitchell-rndinf-satsym",
+            cubic(FilterKind::Mitchell, Quant::RndInf, Overflow::SatSym),
+        ),
+        (
+            "mitchell-rndzero-satzero-w8",
+            hw("linear11", |h| {
+                h.accumulate.filter = FilterKind::Mitchell;
+                h.accumulate.weight_bits = 8;
+                h.accumulate.frame.quant = Quant::RndZero;
+                h.accumulate.frame.overflow = Overflow::SatZero;
+            }),
+        ),
+    ];
+    // The vectors hold negative weights, negative partial sums and clamps both ways.
+    let b = hdl::vectors(StageId::Accumulate, &sc, &cfgs[0].1).expect("bench");
+    let p = |k: &str| b.params.iter().find(|x| x.0 == k).unwrap().1;
+    assert_eq!((p("SIGNED"), p("A_BITS"), p("F_BITS")), (1, 14, 12));
+    let wb = p("W_BITS") as u32;
+    assert!(
+        b.vectors.iter().any(|v| v[0] >> (wb - 1) == 1),
+        "negative weights"
+    );
+    assert!(
+        b.vectors.iter().any(|v| v[6] == 1 && v[5] == 0),
+        "clamp at black"
+    );
+    assert!(
+        b.vectors.iter().any(|v| v[6] == 1 && v[5] == 4095),
+        "clamp at white"
+    );
     agree(StageId::Accumulate, &cfgs, &sc);
 }
 
@@ -675,7 +731,25 @@ fn yosys_cell_counts_grow_with_the_widths_and_are_cached() {
     assert!(b.cells > a.cells, "wider words, more cells: {a:?} {b:?}");
     let again = hdl::synth::synth(&narrow, &cache).expect("synth");
     assert!(again.cached);
-    assert_eq!((again.cells, again.by_type), (a.cells, a.by_type));
+    assert_eq!((again.cells, &again.by_type), (a.cells, &a.by_type));
+    // The signed datapath of Catmull-Rom (two's-complement weights, the 14-bit signed
+    // accumulator and its clamp) against the unsigned one of the tent at the same preset.
+    let signed = hw("linear12", |h| h.accumulate.filter = FilterKind::CatmullRom);
+    let s = hdl::vectors(StageId::Accumulate, &sc, &signed).expect("bench");
+    let c = hdl::synth::synth(&s, &cache).expect("synth");
+    eprintln!(
+        "acc_mac cells: linear8 tent {}, linear12 tent {}, linear12 catmull_rom {} (flip-flops {} / {} / {})",
+        a.cells,
+        b.cells,
+        c.cells,
+        a.flip_flops(),
+        b.flip_flops(),
+        c.flip_flops()
+    );
+    assert!(
+        c.flip_flops() > b.flip_flops(),
+        "the wider accumulator: {b:?} {c:?}"
+    );
     let _ = std::fs::remove_dir_all(&cache);
 }
 

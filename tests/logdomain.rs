@@ -151,13 +151,13 @@ fn adder_hard_cases() {
     // Zero intensity: black samples sum to black (code `off`, L = 0) over a full tent window.
     let k = igemu::stage::accumulate::Kernel::new(igemu::config::FilterKind::Tent, 4, 10, 0.5);
     let mut w = LogWork::new(&add);
-    let black = accumulate_pixel(&add, k.w.iter().map(|&w| (0, w)), &mut w);
+    let black = accumulate_pixel(&add, k.w.iter().map(|&w| (0, w as u32)), &mut w);
     assert!(
         (black - add.off).abs() <= 2,
         "black = {black}, off = {}",
         add.off
     );
-    let white_px = accumulate_pixel(&add, k.w.iter().map(|&w| (255, w)), &mut w);
+    let white_px = accumulate_pixel(&add, k.w.iter().map(|&w| (255, w as u32)), &mut w);
     assert!((white_px - add.max).abs() <= 2, "white = {white_px}");
     // A zero weight contributes nothing.
     assert_eq!(add.term(10, 0), ZERO);

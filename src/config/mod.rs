@@ -21,7 +21,9 @@ mod raster;
 mod schema;
 mod visibility;
 
-pub use accumulate::{AccumulateCfg, FilterKind, GAUSSIAN_SIGMA, MAX_WEIGHT_BITS};
+pub use accumulate::{
+    AccumulateCfg, FilterKind, GAUSSIAN_SIGMA, MAX_WEIGHT_BITS, MITCHELL_BC, MitchellBc,
+};
 pub use coding::{
     ACC_FRAC_BITS, CodingCfg, CodingKind, MAX_LOG_BITS, MIN_LOG_BITS, TABLE_ADDR_BITS,
     TABLE_FRAC_BITS,
@@ -37,7 +39,7 @@ pub use dof::{
     AlphaNorm, DOF_BITS, DofCfg, DofKernel, DofKind, DownsampleCfg, LuminanceCfg,
     MAX_HALF_SIZE_LIMIT, SIGMA_ROM_BITS, SigmaForm,
 };
-pub use dof::{DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, LeakGuard};
+pub use dof::{DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, LeakGuard, Reconstruction};
 pub use gamma::{DAC_BITS, GammaCfg, MAX_GAMMA};
 pub use input::InputCfg;
 pub use presets::PRESETS;
@@ -352,6 +354,37 @@ impl HwConfig {
                     GAUSSIAN_SIGMA.start(),
                     GAUSSIAN_SIGMA.end(),
                     crate::files::num(s)
+                ),
+            );
+        }
+        let m = self.accumulate.mitchell;
+        for (field, v) in [
+            ("accumulate.mitchell.b", m.b),
+            ("accumulate.mitchell.c", m.c),
+        ] {
+            if !(v.is_finite() && MITCHELL_BC.contains(&v)) {
+                return err(
+                    field,
+                    format!(
+                        "must be a finite number in {:?}..={:?}, got {}",
+                        MITCHELL_BC.start(),
+                        MITCHELL_BC.end(),
+                        crate::files::num(v)
+                    ),
+                );
+            }
+        }
+        let negative = self
+            .accumulate
+            .filter
+            .cubic(m)
+            .is_some_and(|bc| bc.negative_lobes());
+        if negative && self.coding.kind == CodingKind::LogAdd {
+            return err(
+                "accumulate.filter",
+                format!(
+                    "\"{}\" has negative lobes (signed weights), which have no logarithm; with coding.kind = \"log-add\" use box, tent, gaussian or cubic_bspline",
+                    self.accumulate.filter.name()
                 ),
             );
         }

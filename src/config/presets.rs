@@ -3,8 +3,8 @@
 
 use super::{
     AccumulateCfg, AlphaNorm, CodingCfg, CyclesCfg, DitherCfg, DofCfg, DofKernel, DofKind,
-    DownsampleCfg, FilterKind, GammaCfg, HwConfig, InputCfg, LuminanceCfg, RasterCfg, SigmaForm,
-    VisibilityCfg,
+    DownsampleCfg, FilterKind, GammaCfg, HwConfig, InputCfg, LuminanceCfg, MitchellBc, RasterCfg,
+    SigmaForm, VisibilityCfg,
 };
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
 
@@ -51,6 +51,7 @@ pub fn preset(name: &str) -> Option<HwConfig> {
             filter: FilterKind::Tent,
             weight_bits: 10,
             gaussian_sigma: 0.5,
+            mitchell: MitchellBc::THIRD,
             frame: q(false, acc_bits, 0, Quant::RndConv, Overflow::Sat),
         },
         gamma: GammaCfg {

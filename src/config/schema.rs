@@ -2,7 +2,7 @@
 //! the TOML layer name (`accumulate.weight_bits` expects `an integer in 2 log2(samples)..=16`).
 //! Built from the same constants as the sections' validation.
 
-use super::accumulate::{GAUSSIAN_SIGMA, MAX_WEIGHT_BITS};
+use super::accumulate::{FilterKind, GAUSSIAN_SIGMA, MAX_WEIGHT_BITS, MITCHELL_BC};
 use super::coding::{ACC_FRAC_BITS, MAX_LOG_BITS, MIN_LOG_BITS, TABLE_ADDR_BITS, TABLE_FRAC_BITS};
 use super::cycles::{CLOCK_MHZ, FRAME_PORT_BITS, TILE, TIMED, TIMING_RANGES};
 use super::dither::{BLUE_NOISE_SIZES, ERROR_INT_BITS, FRAC_BITS, MAX_ERROR_FRAC_BITS};
@@ -54,8 +54,22 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         ("raster", "interp_guard_bits") => range(&INTERP_GUARD_BITS),
         ("raster", "guard_band") => format!("an integer in 0..={MAX_GUARD_BAND} (pixels)"),
         ("visibility", "") => table("z, quant"),
-        ("accumulate", "") => table("filter, weight_bits, gaussian_sigma, frame, quant, overflow"),
-        ("accumulate", "filter") => s("one of \"box\", \"tent\", \"gaussian\""),
+        ("accumulate", "") => {
+            table("filter, weight_bits, gaussian_sigma, mitchell, frame, quant, overflow")
+        }
+        ("accumulate", "filter") => {
+            format!("one of {}", names(FilterKind::ALL.iter().map(|f| f.name())))
+        }
+        ("accumulate", "mitchell") => format!(
+            "a table {{ b = <B>, c = <C> }} of the Mitchell-Netravali family, each a finite number in [{:?}, {:?}] (used by filter = \"mitchell\")",
+            MITCHELL_BC.start(),
+            MITCHELL_BC.end()
+        ),
+        ("accumulate", "mitchell.b") | ("accumulate", "mitchell.c") => format!(
+            "a finite number in [{:?}, {:?}]",
+            MITCHELL_BC.start(),
+            MITCHELL_BC.end()
+        ),
         ("accumulate", "weight_bits") => {
             format!("an integer in 2 log2(raster.samples)..={MAX_WEIGHT_BITS}")
         }

@@ -94,6 +94,6 @@ pub fn log_adder_of(scene: &Scene, hw: &HwConfig) -> Result<LogAdder> {
         ));
     }
     let k = &crate::stage::accumulate::kernel(hw);
-    let w_min = k.w.iter().copied().filter(|&w| w > 0).min().unwrap_or(1);
+    let w_min = k.w.iter().copied().filter(|&w| w > 0).min().unwrap_or(1) as u32;
     Ok(LogAdder::new(log_code(scene, hw)?, &hw.coding, k.f, w_min))
 }

@@ -235,6 +235,12 @@ pub enum FilterArg {
     Box,
     Tent,
     Gaussian,
+    #[value(name = "cubic_bspline")]
+    CubicBspline,
+    #[value(name = "catmull_rom")]
+    CatmullRom,
+    /// Mitchell-Netravali with the hardware file's `accumulate.mitchell` (B = C = 1/3 by default).
+    Mitchell,
 }
 
 impl From<FilterArg> for FilterKind {
@@ -243,6 +249,9 @@ impl From<FilterArg> for FilterKind {
             FilterArg::Box => FilterKind::Box,
             FilterArg::Tent => FilterKind::Tent,
             FilterArg::Gaussian => FilterKind::Gaussian,
+            FilterArg::CubicBspline => FilterKind::CubicBspline,
+            FilterArg::CatmullRom => FilterKind::CatmullRom,
+            FilterArg::Mitchell => FilterKind::Mitchell,
         }
     }
 }

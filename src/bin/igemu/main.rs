@@ -42,6 +42,8 @@ enum Cmd {
     Cycles(cmd::cycles::CyclesArgs),
     /// Small-object flicker: a light point and a thin line swept over 32x32 sub-pixel phases.
     Flicker(cmd::flicker::FlickerArgs),
+    /// The accumulate filters side by side: ripple, step ringing, flicker, frequency response, error, cost, MACs, cycles, time.
+    Filters(cmd::filters::FiltersArgs),
     /// HDL co-simulation of the Verilog models in hdl-models/ (see hdl-models/README.md).
     #[command(subcommand)]
     Hdl(cmd::hdl::HdlCmd),
@@ -75,6 +77,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
         Cmd::Dof(a) => cmd::dof::run(a),
         Cmd::Cycles(a) => cmd::cycles::run(a),
         Cmd::Flicker(a) => cmd::flicker::run(a),
+        Cmd::Filters(a) => cmd::filters::run(a),
         Cmd::Hdl(c) => cmd::hdl::run(c),
         Cmd::Cost(a) => cmd::cost::run(a),
         Cmd::Sweep(a) => cmd::merge::run(a),

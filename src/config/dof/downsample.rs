@@ -48,6 +48,60 @@ impl LeakGuard {
     }
 }
 
+/// The filter that brings the blurred small image back to full resolution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reconstruction {
+    /// 2x2 texels, the tent (the default).
+    Bilinear,
+    /// 4x4 texels, the cubic B-spline (no negative lobe: smoother than the tent).
+    CubicBspline,
+    /// 4x4 texels, Catmull-Rom (interpolating, negative lobes).
+    CatmullRom,
+    /// 4x4 texels, Mitchell-Netravali B = C = 1/3.
+    Mitchell,
+}
+
+impl Reconstruction {
+    /// Every filter, in the order the docs list them.
+    pub const ALL: [Reconstruction; 4] = [
+        Reconstruction::Bilinear,
+        Reconstruction::CubicBspline,
+        Reconstruction::CatmullRom,
+        Reconstruction::Mitchell,
+    ];
+
+    /// The name in a hardware file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reconstruction::Bilinear => "bilinear",
+            Reconstruction::CubicBspline => "cubic_bspline",
+            Reconstruction::CatmullRom => "catmull_rom",
+            Reconstruction::Mitchell => "mitchell",
+        }
+    }
+
+    /// The cubic's (B, C); `None` for bilinear.
+    pub fn cubic(self) -> Option<crate::config::MitchellBc> {
+        use crate::config::MitchellBc;
+        match self {
+            Reconstruction::Bilinear => None,
+            Reconstruction::CubicBspline => Some(MitchellBc { b: 1.0, c: 0.0 }),
+            Reconstruction::CatmullRom => Some(MitchellBc { b: 0.0, c: 0.5 }),
+            Reconstruction::Mitchell => Some(MitchellBc::THIRD),
+        }
+    }
+
+    /// Texels per axis of one reconstructed sample (2 or 4).
+    pub fn texels(self) -> usize {
+        if self == Reconstruction::Bilinear {
+            2
+        } else {
+            4
+        }
+    }
+}
+
 /// `[dof.downsample]`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DownsampleCfg {
@@ -63,10 +117,14 @@ pub struct DownsampleCfg {
     pub blend_rom_bits: u32,
     /// Guard fraction bits of the small image below the frame LSB.
     pub guard_bits: u32,
-    /// Fraction bits of the bilinear weights, `UQ1.<bilinear_bits>`.
+    /// Fraction bits of the reconstruction weights (bilinear `UQ1.<bilinear_bits>`, a cubic's
+    /// signed and summing to exactly `2^bilinear_bits` per axis).
     pub bilinear_bits: u32,
     /// Weight of taps in front of the centre.
     pub leak_guard: LeakGuard,
+    /// The upsampling filter of the blurred small image (its weights have `bilinear_bits`
+    /// fraction bits).
+    pub reconstruction: Reconstruction,
 }
 
 impl Default for DownsampleCfg {
@@ -82,6 +140,7 @@ impl Default for DownsampleCfg {
             guard_bits: 4,
             bilinear_bits: 8,
             leak_guard: LeakGuard::Difference,
+            reconstruction: Reconstruction::Bilinear,
         }
     }
 }
@@ -136,7 +195,15 @@ impl DownsampleCfg {
     /// What a field (without the `dof.downsample.` prefix) expects: the message hint.
     pub(crate) fn hint(field: &str) -> Option<String> {
         Some(match field {
-            "" => "a table [dof.downsample] with factor, taps, offset_bits, blend_bits, blend_rom_bits, guard_bits, bilinear_bits, leak_guard (each optional)".into(),
+            "" => "a table [dof.downsample] with factor, taps, offset_bits, blend_bits, blend_rom_bits, guard_bits, bilinear_bits, leak_guard, reconstruction (each optional)".into(),
+            "reconstruction" => format!(
+                "one of {}",
+                Reconstruction::ALL
+                    .iter()
+                    .map(|l| format!("\"{}\"", l.name()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
             "factor" => format!("{} (the downsampling per axis)", factors()),
             "taps" => format!(
                 "an even integer in {}..={} (Poisson-disc taps besides the centre)",
@@ -171,6 +238,7 @@ pub struct RawDownsample {
     guard_bits: Option<u32>,
     bilinear_bits: Option<u32>,
     leak_guard: Option<LeakGuard>,
+    reconstruction: Option<Reconstruction>,
 }
 
 impl RawDownsample {
@@ -185,5 +253,6 @@ impl RawDownsample {
         set(&mut c.guard_bits, self.guard_bits);
         set(&mut c.bilinear_bits, self.bilinear_bits);
         set(&mut c.leak_guard, self.leak_guard);
+        set(&mut c.reconstruction, self.reconstruction);
     }
 }

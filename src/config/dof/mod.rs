@@ -5,7 +5,9 @@
 mod downsample;
 mod luminance;
 
-pub use downsample::{DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, DownsampleCfg, LeakGuard, RawDownsample};
+pub use downsample::{
+    DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, DownsampleCfg, LeakGuard, RawDownsample, Reconstruction,
+};
 pub use luminance::{LuminanceCfg, RawLuminance};
 
 use super::set;

@@ -52,8 +52,11 @@ pub struct AccWork {
     pub fragments: u64,
     /// Light-point pixel updates.
     pub point_updates: u64,
-    /// Frame-memory overflows (handled by the overflow mode).
+    /// Frame-memory overflows (handled by the overflow mode), the clamps included.
     pub overflows: u64,
+    /// Signed kernels: pixels whose sum left the frame word at the clamp (counted in
+    /// `overflows` too).
+    pub clamps: u64,
 }
 
 /// Parameters of the fixed model.
@@ -106,29 +109,66 @@ impl AccParams {
     /// Frame-memory add with the overflow mode.
     #[inline]
     pub(super) fn add(&self, acc: i64, part: i64, overflows: &mut u64) -> Result<i64> {
-        let q = self.frame.handle_overflow(acc as i128 + part as i128);
-        if q.overflow {
-            *overflows += 1;
-            if self.frame.overflow == Overflow::Error {
-                return Err(Error::Overflow {
-                    signal: "accumulate.frame".into(),
-                    format: self.frame.format.to_string(),
-                    value: acc as i128 + part as i128,
-                    min: self.frame.format.min_code(),
-                    max: self.frame.format.max_code(),
-                });
-            }
+        add_in(&self.frame, "accumulate.frame", acc, part, overflows)
+    }
+
+    /// A pixel's add: into the signed accumulator `accq` of a signed kernel
+    /// ([`Kernel::accumulator`], which the sums cannot overflow), else into the frame word.
+    #[inline]
+    pub(super) fn sum_add(
+        &self,
+        accq: Option<&Quantizer>,
+        acc: i64,
+        part: i64,
+        overflows: &mut u64,
+    ) -> Result<i64> {
+        match accq {
+            Some(q) => add_in(q, "accumulate.acc", acc, part, overflows),
+            None => self.add(acc, part, overflows),
         }
-        Ok(q.code)
+    }
+
+    /// A pixel's end: a signed kernel's accumulator clamped to the frame word with its
+    /// overflow mode (`SAT` clamps, `WRAP` wraps, `ERROR` stops; counted in `overflows`
+    /// and `clamps`); the frame word as it is otherwise.
+    #[inline]
+    pub(super) fn finish(
+        &self,
+        accq: Option<&Quantizer>,
+        acc: i64,
+        w: &mut AccWork,
+    ) -> Result<u32> {
+        if accq.is_none() {
+            return Ok(acc as u32);
+        }
+        let before = w.overflows;
+        let v = self.add(0, acc, &mut w.overflows)?;
+        w.clamps += w.overflows - before;
+        Ok(v as u32)
     }
 
     /// One `w * I` term rounded to the frame format and added to `acc` with the overflow
     /// mode, as the HDL model `hdl-models/rtl/acc_mac.v` computes it: `(code, overflowed)`
-    /// (the `ERROR` mode gives the saturated code and the flag instead of an error).
-    pub fn mac_code(&self, acc: i64, w: u32, i: u32) -> (i64, bool) {
+    /// (the `ERROR` mode gives the saturated code and the flag instead of an error). For a
+    /// signed kernel the sum is the signed accumulator's ([`Kernel::accumulator`]).
+    pub fn mac_code(&self, acc: i64, w: i32, i: u32) -> (i64, bool) {
         let mut st = SignalStats::new("mac", self.frame.format);
         let part = self.product(w as i64 * i as i64, &mut st);
-        let q = self.frame.handle_overflow(acc as i128 + part as i128);
+        let q = self
+            .kernel
+            .accumulator(&self.frame)
+            .unwrap_or(self.frame)
+            .handle_overflow(acc as i128 + part as i128);
+        (q.code, q.overflow)
+    }
+
+    /// A signed kernel's accumulator `acc` clamped to the frame word with its overflow mode,
+    /// as `acc_mac.v`'s `clamp_out` and `clamp_ovf`; `(acc, false)` for an unsigned kernel.
+    pub fn clamp_code(&self, acc: i64) -> (i64, bool) {
+        if !self.kernel.signed() {
+            return (acc, false);
+        }
+        let q = self.frame.handle_overflow(acc as i128);
         (q.code, q.overflow)
     }
 
@@ -143,6 +183,25 @@ impl AccParams {
         let part = self.product(bg_i as i64 * (1i64 << self.kernel.f), &mut st);
         Ok(self.add(0, part, &mut 0)? as u32)
     }
+}
+
+/// `acc + part` in the word of `q` with its overflow mode, named `signal` in an error.
+#[inline]
+fn add_in(q: &Quantizer, signal: &str, acc: i64, part: i64, overflows: &mut u64) -> Result<i64> {
+    let r = q.handle_overflow(acc as i128 + part as i128);
+    if r.overflow {
+        *overflows += 1;
+        if q.overflow == Overflow::Error {
+            return Err(Error::Overflow {
+                signal: signal.into(),
+                format: q.format.to_string(),
+                value: acc as i128 + part as i128,
+                min: q.format.min_code(),
+                max: q.format.max_code(),
+            });
+        }
+    }
+    Ok(r.code)
 }
 
 /// Nearest depth code and covered-sample count of a pixel's own `n x n` samples, given the
@@ -323,10 +382,11 @@ pub(super) fn accumulate_build(
         work.macs += r.work.macs;
         work.fragments += r.work.fragments;
         work.overflows += r.work.overflows;
+        work.clamps += r.work.clamps;
     }
     // Light points: additive I * S, in arrival order.
     for pt in points {
-        for (px, py, sw_sum) in point_weights(pt, &s.reg, region, k, |e| k.w[e] as f64) {
+        for (px, py, sw_sum) in point_weights(pt, &s.reg, region, k, |e| f64::from(k.w[e])) {
             let sum = pt.i as i64 * sw_sum as i64;
             let part = p.product(sum, &mut stats);
             let at = py as usize * width as usize + px as usize;

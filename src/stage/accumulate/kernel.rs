@@ -1,8 +1,10 @@
 //! The quantised filter kernel: exact weights, their quantisation to `weight_bits` fraction
 //! bits by largest remainder (per sample group for the equal-energy filters, over the whole
-//! kernel for the Gaussian), and its unit tests.
+//! kernel for the Gaussian), signed where the filter has negative lobes (Catmull-Rom,
+//! Mitchell), and its unit tests.
 
-use crate::config::FilterKind;
+use crate::config::{FilterKind, MitchellBc};
+use crate::fixed::{QFormat, Quantizer};
 
 /// A quantised filter kernel over the `size x size` samples of one pixel's window.
 #[derive(Clone, Debug, PartialEq)]
@@ -17,25 +19,37 @@ pub struct Kernel {
     pub off: i64,
     /// Weight fraction bits: the weights sum to `2^f`.
     pub f: u32,
-    /// Quantised weights, row-major.
-    pub w: Vec<u32>,
+    /// Quantised weights, row-major (negative only where the filter has negative lobes).
+    pub w: Vec<i32>,
     /// Exact weights (sum 1), row-major: the float reference.
     pub wf: Vec<f64>,
+    /// Sum of the positive quantised weights (`2^f` for a kernel without negative weights).
+    pub pos: i64,
+    /// Sum of the magnitudes of the negative quantised weights (0 without).
+    pub neg: i64,
 }
 
 impl Kernel {
-    /// Builds and quantises the kernel.
+    /// Builds and quantises the kernel (`sigma` for the Gaussian; the Mitchell-Netravali
+    /// (B, C) for `filter = "mitchell"` are [`MitchellBc::THIRD`], see [`Kernel::with_bc`]).
     pub fn new(kind: FilterKind, n: u32, f: u32, sigma: f64) -> Self {
+        Self::with_bc(kind, n, f, sigma, MitchellBc::THIRD)
+    }
+
+    /// [`Kernel::new`] with the (B, C) of `filter = "mitchell"`.
+    pub fn with_bc(kind: FilterKind, n: u32, f: u32, sigma: f64, bc: MitchellBc) -> Self {
         let base = kind.base();
+        let cubic = kind.cubic(bc);
         let size = (base * n) as usize;
         let off = ((base - 1) * n / 2) as i64;
         let nf = n as f64;
         let profile = |j: usize| {
             let u = (j as f64 - off as f64 + 0.5) / nf - 0.5;
-            match kind {
-                FilterKind::Box => 1.0,
-                FilterKind::Tent => 1.0 - u.abs(),
-                FilterKind::Gaussian => (-u * u / (2.0 * sigma * sigma)).exp(),
+            match (kind, cubic) {
+                (_, Some(bc)) => bc.eval(u),
+                (FilterKind::Box, _) => 1.0,
+                (FilterKind::Tent, _) => 1.0 - u.abs(),
+                _ => (-u * u / (2.0 * sigma * sigma)).exp(),
             }
         };
         let p: Vec<f64> = (0..size).map(profile).collect();
@@ -43,10 +57,10 @@ impl Kernel {
         let wf: Vec<f64> = (0..size * size)
             .map(|e| p[e / size] * p[e % size] / total)
             .collect();
-        let one = 1u64 << f;
-        let mut w = vec![0u32; size * size];
+        let one = 1i64 << f;
+        let mut w = vec![0i32; size * size];
         if kind.equal_energy() {
-            let share = one / (n as u64 * n as u64);
+            let share = one / (n as i64 * n as i64);
             for gj in 0..n as usize {
                 for gi in 0..n as usize {
                     let members: Vec<usize> = (0..base as usize)
@@ -62,6 +76,8 @@ impl Kernel {
             let all: Vec<usize> = (0..size * size).collect();
             largest_remainder(&all, &wf, one as f64, one, &mut w);
         }
+        let pos = w.iter().filter(|&&v| v > 0).map(|&v| i64::from(v)).sum();
+        let neg = w.iter().filter(|&&v| v < 0).map(|&v| -i64::from(v)).sum();
         Self {
             kind,
             n,
@@ -70,34 +86,77 @@ impl Kernel {
             f,
             w,
             wf,
+            pos,
+            neg,
         }
+    }
+
+    /// Whether some weight is negative (the multipliers and the accumulator are signed).
+    pub fn signed(&self) -> bool {
+        self.neg > 0
     }
 
     /// Sum of the quantised weights one sample gives to all pixels, for each sample phase
     /// (all equal to `2^f / n^2` for an equal-energy filter).
-    pub fn group_sums(&self) -> Vec<u64> {
+    pub fn group_sums(&self) -> Vec<i64> {
         let n = self.n as usize;
-        let mut out = vec![0u64; n * n];
+        let mut out = vec![0i64; n * n];
         for (e, &w) in self.w.iter().enumerate() {
-            out[(e / self.size % n) * n + e % self.size % n] += w as u64;
+            out[(e / self.size % n) * n + e % self.size % n] += i64::from(w);
         }
         out
+    }
+
+    /// Bits of a weight in the ROM: magnitude bits of the largest weight, plus a sign bit
+    /// for a signed kernel (the unsigned kernels keep their `f + 1` bits: `2^f` fits).
+    pub fn rom_bits(&self) -> u32 {
+        if self.signed() {
+            let m = self.w.iter().map(|&v| v.unsigned_abs()).max().unwrap_or(1);
+            (32 - m.leading_zeros()) + 1
+        } else {
+            self.f + 1
+        }
+    }
+
+    /// The accumulator of a pixel's signed sum, for a signed kernel (`None` otherwise: the
+    /// frame memory accumulates directly). In frame LSBs every partial sum over a pixel's
+    /// fragments lies in `[-(max + 1) neg / 2^f - r, (max + 1) pos / 2^f + r]`, `max` the
+    /// frame's largest code (full white) and `r` one rounding per sample of the window at
+    /// most; the accumulator is the narrowest signed format with the frame's fraction bits
+    /// that holds it, so it cannot overflow: its sign bit and the headroom bits above the
+    /// frame word are derived here, and the clamp to the frame word at the pixel's end
+    /// follows the frame's overflow mode.
+    pub fn accumulator(&self, frame: &Quantizer) -> Option<Quantizer> {
+        if !self.signed() {
+            return None;
+        }
+        let top = i128::from(frame.format.max_code()) + 1;
+        let r = (self.size * self.size) as i128;
+        let hi = (top * i128::from(self.pos)) >> self.f;
+        let lo = (top * i128::from(self.neg)) >> self.f;
+        let bound = (hi.max(lo) + 1 + r) as u128;
+        let bits = 128 - bound.leading_zeros() + 1;
+        let fr = frame.format.frac_bits;
+        Some(Quantizer {
+            format: QFormat::new(true, bits.saturating_sub(fr).max(1), fr),
+            ..*frame
+        })
     }
 }
 
 /// Rounds `wf[m] * scale` for the members to integers that sum to exactly `target`:
 /// floors, then +1 to the largest fractional parts (ties to the lower index).
-fn largest_remainder(members: &[usize], wf: &[f64], scale: f64, target: u64, w: &mut [u32]) {
-    let mut fl: Vec<(usize, u64, f64)> = members
+fn largest_remainder(members: &[usize], wf: &[f64], scale: f64, target: i64, w: &mut [i32]) {
+    let mut fl: Vec<(usize, i64, f64)> = members
         .iter()
         .map(|&m| {
             let v = wf[m] * scale;
             let f = v.floor();
-            (m, f as u64, v - f)
+            (m, f as i64, v - f)
         })
         .collect();
-    let sum: u64 = fl.iter().map(|x| x.1).sum();
-    let mut left = target.saturating_sub(sum);
+    let sum: i64 = fl.iter().map(|x| x.1).sum();
+    let mut left = (target - sum).max(0);
     fl.sort_by(|a, b| {
         b.2.partial_cmp(&a.2)
             .unwrap_or(std::cmp::Ordering::Equal)
@@ -111,7 +170,7 @@ fn largest_remainder(members: &[usize], wf: &[f64], scale: f64, target: u64, w: 
         left -= 1;
     }
     for (m, v, _) in fl {
-        w[m] = v as u32;
+        w[m] = v as i32;
     }
 }
 
@@ -121,19 +180,19 @@ mod tests {
 
     #[test]
     fn kernels_sum_exactly_and_equal_energy_groups_are_equal() {
-        for kind in [FilterKind::Box, FilterKind::Tent, FilterKind::Gaussian] {
+        for kind in FilterKind::ALL {
             for n in [2u32, 4, 8] {
                 for f in [2 * n.trailing_zeros(), 8, 10, 16] {
                     let k = Kernel::new(kind, n, f, 0.5);
                     assert_eq!(
-                        k.w.iter().map(|&w| w as u64).sum::<u64>(),
-                        1u64 << f,
+                        k.w.iter().map(|&w| i64::from(w)).sum::<i64>(),
+                        1i64 << f,
                         "{kind:?} n={n} f={f}"
                     );
                     let g = k.group_sums();
                     if kind.equal_energy() {
                         assert!(
-                            g.iter().all(|&s| s == (1u64 << f) / (n * n) as u64),
+                            g.iter().all(|&s| s == (1i64 << f) / (n * n) as i64),
                             "{kind:?} n={n} f={f}: {g:?}"
                         );
                     }
@@ -149,7 +208,7 @@ mod tests {
     fn tent_4x4_weights_are_the_bed_of_nails() {
         // 1-D tent weights at the 8 sample positions: 1,3,5,7,7,5,3,1 (/32).
         let k = Kernel::new(FilterKind::Tent, 4, 10, 0.5);
-        let row: Vec<u32> = (0..8).map(|i| k.w[3 * 8 + i]).collect();
+        let row: Vec<i32> = (0..8).map(|i| k.w[3 * 8 + i]).collect();
         assert_eq!(row, [7, 21, 35, 49, 49, 35, 21, 7]);
     }
 }

@@ -54,9 +54,11 @@ pub(super) fn has_avx2() -> bool {
 
 /// Computes the span's pixels into `out` (pushed in order).
 pub(super) fn run(sp: &Span, sc: &mut Scratch, dst: Dst, out: &mut RowOut, b: Build) -> Result<()> {
+    // A signed kernel's sums are read back as signed from the `u64` word only.
+    let narrow = b.narrow && !sp.p.kernel.signed();
     macro_rules! go {
         ($n:literal, $b:literal) => {
-            if b.narrow {
+            if narrow {
                 build::<$n, $b, u32>(sp, sc, dst, out, b.avx2)
             } else {
                 build::<$n, $b, u64>(sp, sc, dst, out, b.avx2)
@@ -67,16 +69,20 @@ pub(super) fn run(sp: &Span, sc: &mut Scratch, dst: Dst, out: &mut RowOut, b: Bu
     match (k.n, k.size / k.n as usize) {
         (1, 1) => go!(1, 1),
         (1, 2) => go!(1, 2),
-        (1, _) => go!(1, 3),
+        (1, 3) => go!(1, 3),
+        (1, _) => go!(1, 4),
         (2, 1) => go!(2, 1),
         (2, 2) => go!(2, 2),
-        (2, _) => go!(2, 3),
+        (2, 3) => go!(2, 3),
+        (2, _) => go!(2, 4),
         (4, 1) => go!(4, 1),
         (4, 2) => go!(4, 2),
-        (4, _) => go!(4, 3),
+        (4, 3) => go!(4, 3),
+        (4, _) => go!(4, 4),
         (_, 1) => go!(8, 1),
         (_, 2) => go!(8, 2),
-        _ => go!(8, 3),
+        (_, 3) => go!(8, 3),
+        _ => go!(8, 4),
     }
 }
 
@@ -111,6 +117,7 @@ fn pixels<const N: usize, const B: usize, W: Word>(
     block_ids_n::<N, B>(&s.prim, first, sw, npx, &mut sc.ids);
     let cols = npx + B - 1;
     let macs = (N * B * N * B) as u64;
+    let accq = k.accumulator(&p.frame);
     for gx in 0..npx {
         let base = first + gx * N;
         sc.win
@@ -118,7 +125,7 @@ fn pixels<const N: usize, const B: usize, W: Word>(
         let mut acc = 0i64;
         for &(_, sum) in &sc.win.frags {
             let part = p.product_row(sum, &mut sc.stats);
-            acc = p.add(acc, part, &mut out.work.overflows)?;
+            acc = p.sum_add(accq.as_ref(), acc, part, &mut out.work.overflows)?;
         }
         let nf = sc.win.frags.len() as u64;
         out.work.pixels += 1;
@@ -127,7 +134,7 @@ fn pixels<const N: usize, const B: usize, W: Word>(
         if let Some(c) = sp.tc {
             out.tile_rmw[c] += nf;
         }
-        dst.acc[gx] = acc as u32;
+        dst.acc[gx] = p.finish(accq.as_ref(), acc, &mut out.work)?;
     }
     // Depth and coverage of each pixel's own `N x N` samples: the span's own blocks lie
     // side by side in `N` sample rows, so each row is one pass.
@@ -237,6 +244,9 @@ mod tests {
             (FilterKind::Gaussian, 1),
             (FilterKind::Gaussian, 2),
             (FilterKind::Tent, 8),
+            (FilterKind::CatmullRom, 4),
+            (FilterKind::Mitchell, 2),
+            (FilterKind::CubicBspline, 1),
         ] {
             let mut hw = HwConfig::default_config();
             hw.accumulate.filter = filter;

@@ -24,11 +24,12 @@ use std::sync::Arc;
 
 /// The filter kernel of the hardware configuration.
 pub fn kernel(hw: &HwConfig) -> Kernel {
-    Kernel::new(
+    Kernel::with_bc(
         hw.accumulate.filter,
         hw.raster.samples,
         hw.accumulate.weight_bits,
         hw.accumulate.gaussian_sigma,
+        hw.accumulate.mitchell,
     )
 }
 
@@ -83,10 +84,20 @@ impl Stage for Accumulate {
                 "filters the samples ({:?}, {ee}) and sums them in the log domain (coding.kind = \"log-add\")",
                 a.filter
             ),
-            _ => format!(
-                "filters the samples ({:?}, {ee}) into the {} frame memory",
-                a.filter, a.frame.format
-            ),
+            _ => match kernel(hw).accumulator(&a.frame) {
+                None => format!(
+                    "filters the samples ({:?}, {ee}) into the {} frame memory",
+                    a.filter, a.frame.format
+                ),
+                Some(q) => format!(
+                    "filters the samples ({:?}, {ee}, signed weights) into a {} accumulator (a sign bit and {} headroom bit(s) over the frame word), clamped to the {} frame memory with {}",
+                    a.filter,
+                    q.format,
+                    q.format.total_bits() - 1 - a.frame.format.total_bits(),
+                    a.frame.format,
+                    a.frame.overflow
+                ),
+            },
         }))
     }
 
@@ -124,7 +135,7 @@ impl Stage for Accumulate {
                     size,
                     cx.pool,
                 )?;
-                let facts = Facts {
+                let mut facts = Facts {
                     work: vec![
                         ("pixels", w.pixels),
                         ("macs", w.macs),
@@ -134,6 +145,11 @@ impl Stage for Accumulate {
                     signals: stats,
                     ..Facts::default()
                 };
+                if let Some(q) = k.accumulator(&hw.accumulate.frame) {
+                    facts.work.push(("clamps", w.clamps));
+                    facts.note("acc_bits", q.format.total_bits() as u64);
+                    facts.note("weight_rom_bits", k.rom_bits() as u64);
+                }
                 (frame, FrameCoding::Linear, tile_rmw, None, facts)
             }
             SampleCoding::Log(code) => {
@@ -189,7 +205,7 @@ impl Stage for Accumulate {
                     let (c0, r0) = window(&s.samples, k, px, py);
                     let terms = (0..k.size)
                         .flat_map(|j| (0..k.size).map(move |i| (j, i)))
-                        .map(|(j, i)| (s.samples.i[(r0 + j) * sw + c0 + i], k.w[j * k.size + i]));
+                        .map(|(j, i)| (s.samples.i[(r0 + j) * sw + c0 + i], log_w(k, j, i)));
                     let v = accumulate_pixel_f64(code, k.f, terms);
                     let at = py as usize * frame.width as usize + px as usize;
                     local_add(&mut e, add, frame.acc[at] as i64, v);
@@ -217,7 +233,7 @@ impl Stage for Accumulate {
         let max = cx.hw.accumulate.frame.format.max_code() as f64;
         let mut e = LocalError::default();
         for (&a, &b) in frame.acc.iter().zip(&fl) {
-            e.add(a as f64, b.min(max));
+            e.add(a as f64, b.clamp(0.0, max));
         }
         Some(e.finish())
     }
@@ -275,8 +291,15 @@ impl Stage for Accumulate {
         match &a.adder {
             Some(add) => v.extend(add.images()),
             None => {
-                let w: Vec<u32> = a.kernel.w.clone();
-                v.push(MemImage::table(WEIGHT_ROM, a.kernel.f + 1, Arc::new(w)));
+                // Two's complement in the ROM word (the unsigned kernels' weights as they are).
+                let bits = a.kernel.rom_bits();
+                let mask = if bits >= 32 {
+                    u32::MAX
+                } else {
+                    (1u32 << bits) - 1
+                };
+                let w: Vec<u32> = a.kernel.w.iter().map(|&v| v as u32 & mask).collect();
+                v.push(MemImage::table(WEIGHT_ROM, bits, Arc::new(w)));
             }
         }
         v
@@ -291,11 +314,24 @@ fn frame_size(l: &crate::stage::Layout) -> (u32, u32) {
     }
 }
 
+/// The frame memory's word: the log frame's, a signed kernel's accumulator (the partial
+/// sums live there between a pixel's fragments), else the frame format's.
 fn frame_bits(hw: &HwConfig, a: &Accumulated) -> u32 {
     match &a.adder {
         Some(add) => add.frame_bits(),
-        None => hw.accumulate.frame.format.total_bits(),
+        None => a
+            .kernel
+            .accumulator(&hw.accumulate.frame)
+            .map_or(hw.accumulate.frame.format.total_bits(), |q| {
+                q.format.total_bits()
+            }),
     }
+}
+
+/// Kernel weight `(j, i)` for the log-add path, whose kernels have no negative weight (the
+/// configuration refuses a filter with negative lobes under `coding.kind = "log-add"`).
+fn log_w(k: &Kernel, j: usize, i: usize) -> u32 {
+    k.w[j * k.size + i].max(0) as u32
 }
 
 /// Buffer column and row of the first sample of pixel `(px, py)`'s filter window.
@@ -317,7 +353,7 @@ fn log_accumulate(
     code: LogCode,
     size: (u32, u32),
 ) -> Result<(Frame, LogAdder, Vec<u64>, Facts)> {
-    let w_min = k.w.iter().copied().filter(|&w| w > 0).min().unwrap_or(1);
+    let w_min = k.w.iter().copied().filter(|&w| w > 0).min().unwrap_or(1) as u32;
     let add = LogAdder::new(code, &cx.hw.coding, k.f, w_min);
     let (width, height) = size;
     let l = cx.layout;
@@ -328,7 +364,11 @@ fn log_accumulate(
     // The background (the frame's clear value) through the same adder: its signals count,
     // its work does not (it is one constant).
     let mut bg_work = LogWork::new(&add);
-    let bg_code = accumulate_pixel(&add, k.w.iter().map(|&w| (s.bg, w)), &mut bg_work);
+    let bg_code = accumulate_pixel(
+        &add,
+        k.w.iter().map(|&w| (s.bg, w.max(0) as u32)),
+        &mut bg_work,
+    );
     work.frame.merge(&bg_work.frame);
     work.term.merge(&bg_work.term);
     let mut frame = Frame::cleared(width, height, bg_code as u32, cx.pool);
@@ -346,8 +386,7 @@ fn log_accumulate(
                     let terms = (0..k.size).flat_map(|j| (0..k.size).map(move |i| (j, i)));
                     let a = accumulate_pixel(
                         &add,
-                        terms
-                            .map(|(j, i)| (samples.i[(r0 + j) * sw + c0 + i], k.w[j * k.size + i])),
+                        terms.map(|(j, i)| (samples.i[(r0 + j) * sw + c0 + i], log_w(k, j, i))),
                         &mut wk,
                     );
                     let (zmin, cov) = own_depth_coverage(samples, k, r0 * sw + c0, sw);
@@ -374,7 +413,7 @@ fn log_accumulate(
     }
     // Light points: their summed weight's log plus the point's code, added in arrival order.
     for pt in &s.points {
-        for (px, py, ssum) in point_weights(pt, &samples.reg, &region, k, |e| k.w[e] as f64) {
+        for (px, py, ssum) in point_weights(pt, &samples.reg, &region, k, |e| f64::from(k.w[e])) {
             let at = py as usize * width as usize + px as usize;
             let w = (ssum as u32).min(1 << k.f);
             work.term_adds += 1;

@@ -15,11 +15,13 @@ use super::kernel::Kernel;
 use crate::fixed::SignalStats;
 
 /// The word the window sums are computed in: `u32` when every sum provably fits (the
-/// kernel's weights, which sum to `2^f`, times the largest intensity code, below `2^32`),
-/// else `u64`. Exact either way, so the arithmetic wraps only where it cannot overflow.
+/// kernel's weights, which sum to `2^f`, all non-negative, times the largest intensity
+/// code, below `2^32`), else `u64`. Exact either way, so the arithmetic wraps only where it
+/// cannot overflow; a signed kernel's sums are two's complement in the `u64` word (exact
+/// modulo `2^64`, read back as `i64`).
 pub(super) trait Word: Copy + Default {
     /// `w * I`.
-    fn prod(w: u32, i: u32) -> Self;
+    fn prod(w: i32, i: u32) -> Self;
     /// `self + o`.
     fn add(self, o: Self) -> Self;
     /// `self` where `on`, else zero.
@@ -28,14 +30,16 @@ pub(super) trait Word: Copy + Default {
     fn to_i64(self) -> i64;
 }
 
-/// `Word` for an unsigned type at least 32 bits wide (`w * I` of two `u32` is exact in
-/// `u64`; in `u32` only where the caller proved it fits, see [`sums_fit_u32`]).
+/// `Word` for an unsigned type at least 32 bits wide (`w * I` of an `i32` and a `u32` is
+/// exact modulo `2^64` in `u64`; in `u32` only where the caller proved it fits and the
+/// weights are non-negative, see [`sums_fit_u32`]). `$w` is the weight's two's complement
+/// in the word.
 macro_rules! word {
-    ($t:ty) => {
+    ($t:ty, $w:ty) => {
         impl Word for $t {
             #[inline(always)]
-            fn prod(w: u32, i: u32) -> Self {
-                <$t>::from(w).wrapping_mul(<$t>::from(i))
+            fn prod(w: i32, i: u32) -> Self {
+                (w as $w as $t).wrapping_mul(<$t>::from(i))
             }
             #[inline(always)]
             fn add(self, o: Self) -> Self {
@@ -52,14 +56,16 @@ macro_rules! word {
         }
     };
 }
-word!(u32);
-word!(u64);
+word!(u32, u32);
+word!(u64, i64);
 
-/// Whether the window sums of kernel `k` over intensity codes up to `imax` fit a `u32`.
+/// Whether the window sums of kernel `k` over intensity codes up to `imax` fit a `u32`
+/// (never for a signed kernel: its sums are read back as signed from the `u64` word).
 pub(super) fn sums_fit_u32(k: &Kernel, imax: u32) -> bool {
-    let wsum: u64 = k.w.iter().map(|&w| u64::from(w)).sum();
-    wsum.checked_mul(u64::from(imax))
-        .is_some_and(|m| m <= u64::from(u32::MAX))
+    !k.signed()
+        && (k.pos as u64)
+            .checked_mul(u64::from(imax))
+            .is_some_and(|m| m <= u64::from(u32::MAX))
 }
 
 /// Scratch of one pixel's per-primitive sums (reused across pixels).
@@ -95,7 +101,7 @@ impl WindowSums {
         &mut self,
         prim: &[u32],
         inten: &[u32],
-        kw: &[u32],
+        kw: &[i32],
         base: usize,
         sw: usize,
         ids: &[u64],
@@ -139,7 +145,7 @@ impl WindowSums {
 struct Window<'a, const N: usize, const B: usize> {
     prim: &'a [u32],
     inten: &'a [u32],
-    kw: &'a [u32],
+    kw: &'a [i32],
     nz: &'a [u32],
     base: usize,
     sw: usize,

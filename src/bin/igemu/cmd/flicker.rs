@@ -32,6 +32,8 @@ pub fn run(a: FlickerArgs) -> Result<ExitCode, Error> {
     let mut hw = HwConfig::resolve(a.hw.as_deref())?;
     if let Some(f) = a.filter {
         hw.accumulate.filter = f.into();
+        hw.validate()
+            .map_err(|(field, msg)| hw.error(&field, msg))?;
     }
     if a.no_gamma_correction {
         hw.gamma.correction = false;

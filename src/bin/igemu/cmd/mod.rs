@@ -5,6 +5,7 @@ pub mod check;
 pub mod cost;
 pub mod cycles;
 pub mod dof;
+pub mod filters;
 pub mod flicker;
 pub mod hdl;
 pub mod merge;

@@ -23,6 +23,9 @@ pub const OFFSET_ROM: &str = "dof down offset ROM";
 pub const BLEND_ROM: &str = "dof down blend ROM";
 /// The small Gaussian's taps.
 pub const COEF_ROM: &str = "dof down coefficient ROM";
+/// Name of a cubic reconstruction's weight ROM (`2^bilinear_bits + 1` entries of four signed
+/// weights).
+pub const RECON_ROM: &str = "dof down reconstruction ROM";
 
 /// `ceil(log2(n))`.
 fn clog2(n: u64) -> u32 {
@@ -41,6 +44,13 @@ pub fn cost(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat, z_bits: u32) -> Cos
     let sb = small_format(frame_fmt, d.guard_bits).total_bits();
     let (b, o, bb, c) = (d.blend_bits, d.offset_bits, d.bilinear_bits, p.coef_bits);
     let n = d.taps;
+    // Texels per reconstructed sample and the width of a weight (a cubic's are signed).
+    let rt = d.reconstruction.texels().pow(2) as u32;
+    let wb = if d.reconstruction.cubic().is_some() {
+        bb + 2
+    } else {
+        bb + 1
+    };
     let gt = plan.coef.len() as u32;
     let lg = clog2(n as u64 + 1);
     // sigma_max, the CoC radius (SIGMA_FRAC + b fraction bits) and the full-resolution
@@ -56,7 +66,11 @@ pub fn cost(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat, z_bits: u32) -> Cos
         Unit::adder("Gaussian tap sums (vertical)", gt, sb + c),
         Unit::adder("blend ROM interpolation", 1, b + 2),
         Unit::adder("tap positions", 2 * n, pos_bits),
-        Unit::adder("bilinear sums", 3 * (n + 1), sb + 2 * bb),
+        Unit::adder(
+            &format!("{} sums", d.reconstruction.name()),
+            (rt - 1) * (n + 1),
+            sb + 2 * bb + 2,
+        ),
         Unit::adder("depth comparisons (tap in front)", n, z_bits),
         Unit::adder("tap mixes", n + 1, tap_bits),
         Unit::adder("weighted tap sum", n, tap_bits + b + 1 + lg),
@@ -70,8 +84,18 @@ pub fn cost(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat, z_bits: u32) -> Cos
         Unit::mul("Gaussian taps (vertical)", gt, sb, c + 1),
         Unit::mul("CoC radius beta x sigma_max", 1, b + 1, s_bits),
         Unit::mul("tap offsets r x d", n, r_bits, o + 1),
-        Unit::mul("bilinear weight products", 4 * (n + 1), bb + 1, bb + 1),
-        Unit::mul("bilinear taps", 4 * (n + 1), sb, 2 * bb + 1),
+        Unit::mul(
+            &format!("{} weight products", d.reconstruction.name()),
+            rt * (n + 1),
+            wb,
+            wb,
+        ),
+        Unit::mul(
+            &format!("{} taps", d.reconstruction.name()),
+            rt * (n + 1),
+            sb,
+            2 * wb - 1,
+        ),
         Unit::mul("tap mixes", 2 * (n + 1), sb, b + 1),
         Unit::mul("tap weight x value", n, tap_bits, b + 1),
         Unit::mul("normaliser divide", 1, tap_bits + b + 1 + lg, b + 1 + lg),
@@ -84,19 +108,19 @@ pub fn cost(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat, z_bits: u32) -> Cos
             plan.rom_shift,
         ));
     }
-    Cost::new(
-        vec![
-            Memory::ram(BOX_ROW, sw, fb + 2 * plan.factor_log2),
-            Memory::ram(LINE_BUFFERS, (gt as u64 + 1) * sw, sb),
-            Memory::ram(BLURRED, sw * sh, sb),
-            Memory::ram(WINDOW, (2 * plan.reach as u64 + 1) * w, fb + z_bits + b + 1),
-            Memory::rom(OFFSET_ROM, n as u64 / 2, 2 * (o + 1)),
-            Memory::rom(BLEND_ROM, plan.blend_rom.len() as u64, b + 1),
-            Memory::rom(COEF_ROM, plan.m as u64 + 1, c + 1),
-        ],
-        adders,
-        multipliers,
-    )
+    let mut memories = vec![
+        Memory::ram(BOX_ROW, sw, fb + 2 * plan.factor_log2),
+        Memory::ram(LINE_BUFFERS, (gt as u64 + 1) * sw, sb),
+        Memory::ram(BLURRED, sw * sh, sb),
+        Memory::ram(WINDOW, (2 * plan.reach as u64 + 1) * w, fb + z_bits + b + 1),
+        Memory::rom(OFFSET_ROM, n as u64 / 2, 2 * (o + 1)),
+        Memory::rom(BLEND_ROM, plan.blend_rom.len() as u64, b + 1),
+        Memory::rom(COEF_ROM, plan.m as u64 + 1, c + 1),
+    ];
+    if d.reconstruction.cubic().is_some() {
+        memories.push(Memory::rom(RECON_ROM, (1u64 << bb) + 1, 4 * wb));
+    }
+    Cost::new(memories, adders, multipliers)
 }
 
 /// The contents of the memories that hold more than transient values (names as in
@@ -115,7 +139,7 @@ pub fn memories(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat) -> Vec<MemImage
         region_only: false,
         get: Arc::new(move |w, f| if f == 0 { words[w].0 } else { words[w].1 }),
     };
-    vec![
+    let mut v = vec![
         MemImage::table(BLURRED, sb, plan.blurred.clone()),
         offsets,
         MemImage::table(
@@ -128,7 +152,20 @@ pub fn memories(plan: &DownPlan, p: &DofCfg, frame_fmt: QFormat) -> Vec<MemImage
             p.coef_bits + 1,
             Arc::new(plan.coef[plan.m..].to_vec()),
         ),
-    ]
+    ];
+    if let Some(bc) = d.reconstruction.cubic() {
+        // Four two's-complement fields of `bilinear_bits + 2` bits per entry.
+        let wb = d.bilinear_bits + 2;
+        let rom = Arc::new(super::recon::rom(bc, d.bilinear_bits));
+        v.push(MemImage {
+            name: RECON_ROM.into(),
+            fields: vec![wb; 4],
+            words: rom.len(),
+            region_only: false,
+            get: Arc::new(move |w, f| (rom[w][f] as u64) & ((1u64 << wb) - 1)),
+        });
+    }
+    v
 }
 
 /// One token per full-resolution row (the blend streams rows to gamma): its blend outputs,

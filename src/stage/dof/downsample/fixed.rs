@@ -107,30 +107,51 @@ fn bl_weight(frac: i64, pf: u32, bb: u32, quant: Quant) -> u64 {
     }
 }
 
+/// What a read of the blurred small image needs besides the position: the image, the plan,
+/// the position's fraction bits `pf`, the weights' fraction bits `bb` and rounding
+/// `quant`, and the small format's quantiser `q` with its fraction bits `frac`.
+pub(super) struct TexelRead<'a> {
+    pub blur: &'a [u64],
+    pub plan: &'a DownPlan,
+    pub pf: u32,
+    pub bb: u32,
+    pub quant: Quant,
+    pub q: Quantizer,
+    pub frac: u32,
+}
+
+impl TexelRead<'_> {
+    /// The texel left of and above the full-resolution position `(px, py) 2^-pf` (texel
+    /// centres at `(i + 1/2) factor`) and the position's fractions past it, each rounded to
+    /// `bb` bits: `(i0, j0, wx, wy)`.
+    #[inline]
+    pub fn origin(&self, px: i64, py: i64) -> (i64, i64, u64, u64) {
+        let sf = self.pf + self.plan.factor_log2;
+        let half = 1i64 << (sf - 1);
+        let (u, v) = (px - half, py - half);
+        let (i0, j0) = (u >> sf, v >> sf);
+        let wx = bl_weight(u - (i0 << sf), sf, self.bb, self.quant);
+        let wy = bl_weight(v - (j0 << sf), sf, self.bb, self.quant);
+        (i0, j0, wx, wy)
+    }
+
+    /// A weighted sum with `2 bb` weight fraction bits rounded to the small format:
+    /// `(code, overflowed)`.
+    #[inline]
+    pub fn round(&self, sum: i128) -> (i64, bool) {
+        let r = self.q.quantize_raw(sum, (self.frac + 2 * self.bb) as i32);
+        (r.code, r.overflow)
+    }
+}
+
 /// The bilinear sample of the blurred small image at the full-resolution position
 /// `(px, py) 2^-pf` (pixel `x` spans `[x, x + 1)`), texel centres at `(i + 1/2) factor`,
 /// coordinates clamped; weights `UQ1.<bb>`, the sample rounded to the small format.
 #[inline]
-#[allow(clippy::too_many_arguments)]
-fn bilinear(
-    blur: &[u64],
-    plan: &DownPlan,
-    px: i64,
-    py: i64,
-    pf: u32,
-    bb: u32,
-    quant: Quant,
-    q: &Quantizer,
-    frac: u32,
-) -> (i64, bool) {
-    let k = plan.factor_log2;
-    let sf = pf + k;
-    let half = 1i64 << (sf - 1);
-    let (u, v) = (px - half, py - half);
-    let (i0, j0) = (u >> sf, v >> sf);
-    let one = 1u64 << bb;
-    let wx = bl_weight(u - (i0 << sf), sf, bb, quant);
-    let wy = bl_weight(v - (j0 << sf), sf, bb, quant);
+fn bilinear(t: &TexelRead, px: i64, py: i64) -> (i64, bool) {
+    let (plan, blur) = (t.plan, t.blur);
+    let (i0, j0, wx, wy) = t.origin(px, py);
+    let one = 1u64 << t.bb;
     let (sw, sh) = (plan.small_width as i64, plan.small_height as i64);
     let cx = |i: i64| i.clamp(0, sw - 1) as usize;
     let cy = |j: i64| j.clamp(0, sh - 1) as usize * plan.small_width;
@@ -140,8 +161,7 @@ fn bilinear(
         + s(wx * (one - wy), y0 + x1)
         + s((one - wx) * wy, y1 + x0)
         + s(wx * wy, y1 + x1);
-    let r = q.quantize_raw(sum as i128, (frac + 2 * bb) as i32);
-    (r.code, r.overflow)
+    t.round(sum as i128)
 }
 
 /// The fixed-point method on frame codes `code` (in `frame_fmt`) and depth codes `key`:
@@ -215,6 +235,18 @@ pub fn downsample_fixed(
     };
     let mut out = vec![0u32; w * h];
     let offs = &plan.taps.codes;
+    // The reconstruction: bilinear, or a cubic's weight ROM; its MACs per blurred sample.
+    let recon = d.reconstruction.cubic().map(|bc| super::recon::rom(bc, bb));
+    let read = TexelRead {
+        blur: &blurred,
+        plan,
+        pf,
+        bb,
+        quant: p.quant,
+        q: sq,
+        frac: sfrac,
+    };
+    let rmacs = d.reconstruction.texels().pow(2) as u64;
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
@@ -223,7 +255,10 @@ pub fn downsample_fixed(
             let sample = |px: i64, py: i64, bt: u64, j: usize, tap_ovf: &mut u64| -> u128 {
                 let sharp = (code[j] as u128) << g;
                 let blur = if bt > 0 {
-                    let (v, o) = bilinear(&blurred, plan, px, py, pf, bb, p.quant, &sq, sfrac);
+                    let (v, o) = match &recon {
+                        None => bilinear(&read, px, py),
+                        Some(rom) => super::recon::sample_fixed(&read, rom, px, py),
+                    };
                     *tap_ovf += u64::from(o);
                     v as u128
                 } else {
@@ -236,7 +271,7 @@ pub fn downsample_fixed(
                 let t = sample(cx, cy, bc, i, &mut work.tap_overflows);
                 work.passthrough += 1;
                 work.taps += 1;
-                work.macs += 2 + if bc > 0 { 4 } else { 0 };
+                work.macs += 2 + if bc > 0 { rmacs } else { 0 };
                 out[i] = out_pt.put(t, out_frac)? as u32;
                 continue;
             }
@@ -260,7 +295,7 @@ pub fn downsample_fixed(
                 }
                 let t = sample(px, py, beta[j], j, &mut work.tap_overflows);
                 work.taps += 1;
-                work.macs += 3 + if beta[j] > 0 { 4 } else { 0 };
+                work.macs += 3 + if beta[j] > 0 { rmacs } else { 0 };
                 num += wt as u128 * t;
                 den += wt as u128;
             }

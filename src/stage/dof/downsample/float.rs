@@ -1,7 +1,8 @@
 //! The float reference of the downsample method: the same steps in f64 with the exact
 //! blend factors `|sigma| / scale`, the exact CoC radii `|sigma|` (0 and no blend where the
 //! fixed path passes a pixel through), the exact Poisson
-//! offsets, float Gaussian taps, exact bilinear weights and an exact normaliser divide.
+//! offsets, float Gaussian taps, exact bilinear (or cubic) weights and an exact normaliser
+//! divide.
 
 use super::fixed::tap_weight_f64;
 use super::plan::{Blur, DownPlan};
@@ -72,6 +73,7 @@ pub fn downsample_f64(
         })
         .collect();
     let guard = p.downsample.leak_guard;
+    let recon = p.downsample.reconstruction.cubic();
     let mut out = vec![0.0; w * h];
     for y in 0..h {
         for x in 0..w {
@@ -94,10 +96,10 @@ pub fn downsample_f64(
                     continue;
                 }
                 let bt = beta[j];
-                let b = if bt > 0.0 {
-                    bilinear(&blurred, plan, px, py)
-                } else {
-                    0.0
+                let b = match (bt > 0.0, recon) {
+                    (false, _) => 0.0,
+                    (true, None) => bilinear(&blurred, plan, px, py),
+                    (true, Some(bc)) => super::recon::sample_f64(&blurred, plan, bc, px, py),
                 };
                 num += wt * ((1.0 - bt) * value[j] + bt * b);
                 den += wt;

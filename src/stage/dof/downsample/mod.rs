@@ -19,14 +19,16 @@
 //!
 //! Files: `plan` (the frame's largest blur, the Gaussian, the blend ROM, the [`Blur`]
 //! trait), `poisson` (the tap offsets), `small` (box sums and Gaussian passes shared by both
-//! models), `fixed` (the datapath), `float` (the reference), `cost` (cost, ROM images,
-//! tokens).
+//! models), `fixed` (the datapath), `float` (the reference), `recon` (the cubic
+//! reconstructions of the blurred image, `dof.downsample.reconstruction`), `cost` (cost, ROM
+//! images, tokens).
 
 mod cost;
 mod fixed;
 mod float;
 mod plan;
 mod poisson;
+mod recon;
 mod small;
 
 pub use cost::{
