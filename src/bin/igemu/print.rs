@@ -379,7 +379,7 @@ pub fn print_front(
         let r = &rows[i];
         out!("  {:>5}  {:<16}", r.index, r.scene);
         for x in axes {
-            out!("  {:>18.4}", x.value(r));
+            out!("  {:>18}", x.show(x.value(r)));
         }
         let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
         outln!("  {}", cfg.join(" "));
