@@ -441,3 +441,34 @@ fn dev_null_is_an_output() {
     );
     assert!(!p.exists());
 }
+
+/// `igemu ranges` says why its overflow counters have no range (issue 30): the `-` rows are
+/// listed under the table, and `--json` marks them `overflow_only`.
+#[test]
+fn ranges_say_which_signals_only_count_overflows() {
+    let (code, out, err) = igemu(&["ranges"]);
+    assert_eq!(code, 0, "{err}");
+    let note = out.lines().last().expect("a last line");
+    assert!(
+        note.starts_with("-: ") && note.contains("count only their overflows"),
+        "{out}"
+    );
+    for row in out
+        .lines()
+        .filter(|l| l.split_whitespace().nth(3) == Some("-"))
+    {
+        let name = row.split_whitespace().nth(1).expect("signal");
+        assert!(
+            note.contains(name),
+            "{name} has no range and is not in: {note}"
+        );
+    }
+    let (code, json, err) = igemu(&["ranges", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: Vec<serde_json::Value> = serde_json::from_str(&json).expect("JSON");
+    for s in &v {
+        let counter = s["overflow_only"].as_bool().expect("overflow_only");
+        assert_eq!(counter, s["count"] == 0 && s["min"].is_null(), "{s}");
+        assert_eq!(counter, note.contains(s["signal"].as_str().unwrap()), "{s}");
+    }
+}
