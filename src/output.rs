@@ -55,7 +55,9 @@ pub fn unwritable_folder(dir: &Path) -> Option<String> {
 /// in the destination's folder; [`AtomicFile::commit`] flushes and syncs it and renames it
 /// over the destination. Dropped without a commit (an error, a panic), the temporary is
 /// removed and the destination is untouched. A process killed while writing leaves the
-/// destination as it was (and the hidden temporary behind).
+/// destination as it was (and the hidden temporary behind). A destination that is a special
+/// file (a device such as `/dev/null`, a FIFO, a socket) is written in place instead: it
+/// cannot be replaced by a rename, and is not a file a reader could see half-written.
 pub struct AtomicFile {
     dest: PathBuf,
     tmp: PathBuf,
@@ -85,6 +87,19 @@ impl AtomicFile {
         }
         let name = dest.file_name().expect("checked by unwritable");
         let existing = std::fs::metadata(dest).ok();
+        if existing.as_ref().is_some_and(is_special) {
+            // A device, pipe or socket (`/dev/null`, a FIFO): written in place, since a
+            // rename would replace the special file itself.
+            let file = OpenOptions::new()
+                .write(true)
+                .open(dest)
+                .map_err(|e| out_error(dest, "cannot open".into(), &e))?;
+            return Ok(AtomicFile {
+                dest: dest.to_path_buf(),
+                tmp: PathBuf::new(),
+                file: Some(BufWriter::new(file)),
+            });
+        }
         let dir = match dest.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
@@ -137,6 +152,10 @@ impl AtomicFile {
             Ok(f) => f,
             Err(e) => return Err(self.fail("cannot write", e.error())),
         };
+        if self.tmp.as_os_str().is_empty() {
+            // A special file, written in place: nothing to sync or rename.
+            return Ok(());
+        }
         if let Err(e) = file.sync_all() {
             return Err(self.fail("cannot write", &e));
         }
@@ -223,6 +242,24 @@ pub fn write_file(dest: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<()>
     write_with(dest, |w| w.write_all(bytes.as_ref()))
 }
 
+/// Whether file metadata is of a special file (neither a regular file nor a folder).
+fn is_special(m: &std::fs::Metadata) -> bool {
+    !m.is_file() && !m.is_dir()
+}
+
+/// The image format of an output path: from its extension (`.png`; the PNG encoder is the
+/// one built in, so another extension is refused by the encoder with its name), and PNG
+/// for a path without an extension that is a special file (`-o /dev/null`, a FIFO).
+fn image_format(path: &str) -> image::ImageResult<ImageFormat> {
+    let p = Path::new(path);
+    match ImageFormat::from_path(p) {
+        Err(_) if p.extension().is_none() && std::fs::metadata(p).is_ok_and(|m| is_special(&m)) => {
+            Ok(ImageFormat::Png)
+        }
+        r => r,
+    }
+}
+
 fn save<P: image::Pixel<Subpixel = S> + image::PixelWithColorType, S: image::Primitive>(
     img: ImageBuffer<P, Vec<S>>,
     path: &str,
@@ -234,7 +271,12 @@ where
         path: path.into(),
         msg: e.to_string(),
     };
-    let format = ImageFormat::from_path(path).map_err(image_error)?;
+    let format = image_format(path).map_err(|e| Error::Image {
+        path: path.into(),
+        msg: format!(
+            "{e}: images are written as PNG; name the file .png (a special file such as /dev/null needs no extension)"
+        ),
+    })?;
     let mut out = AtomicFile::create(path)?;
     img.write_to(&mut out, format).map_err(image_error)?;
     out.commit()

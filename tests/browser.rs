@@ -287,13 +287,16 @@ fn html_reports_open_in_a_browser_without_errors() {
         "stage links: {links:?}"
     );
 
+    readable_render_page(&tab, true);
+
     // A log-coded pinhole render: no depth of field (no layer map, no sigma plot).
-    open_and_check(
+    let tab = open_and_check(
         &browser,
         &dir.join("l.html"),
         7,
         &dir.join("render-log.png"),
     );
+    readable_render_page(&tab, false);
 
     // The sweep: the Pareto plot; the table sorts numerically on a click.
     let tab = open_and_check(&browser, &dir.join("s.html"), 1, &dir.join("sweep.png"));
@@ -318,6 +321,133 @@ fn html_reports_open_in_a_browser_without_errors() {
         "document.querySelectorAll('#rows-table tr.front').length",
     );
     assert!(front.as_u64().unwrap_or(0) >= 1, "the front is highlighted");
+    sweep_page_fits(&tab);
+}
+
+/// The text of every `[label, ...]` array a script returns as a JSON string.
+fn eval_json<T: serde::de::DeserializeOwned>(tab: &Tab, js: &str) -> T {
+    let v = eval(tab, js);
+    serde_json::from_str(
+        v.as_str()
+            .unwrap_or_else(|| panic!("{js}: not a JSON string: {v}")),
+    )
+    .unwrap_or_else(|e| panic!("{js}: {e}"))
+}
+
+/// Issue 30's readability of a render page: every signal row has values or says why not;
+/// the banding map has its legend (and says when no contour was found); the gamma plot's
+/// legend is under the figure, not drawn over the curves; with the truth, the algorithm /
+/// quantisation split table.
+fn readable_render_page(tab: &Tab, truth: bool) {
+    // [signal, values, seen] of every signal row.
+    let rows: Vec<(String, String, String)> = eval_json(
+        tab,
+        "JSON.stringify(Array.from(document.querySelectorAll('h3[id^=\"signals-\"] + table tr')).filter(r => r.cells[0].tagName === 'TD').map(r => [r.cells[0].textContent, r.cells[3].textContent, r.cells[4].textContent]))",
+    );
+    assert!(rows.len() >= 8, "signal rows: {rows:?}");
+    for (name, values, seen) in &rows {
+        let has_values = values.parse::<u64>().is_ok_and(|n| n > 0) && seen.contains("..");
+        let says_why = seen.starts_with("not recorded") || seen.starts_with("none:");
+        assert!(
+            has_values || says_why,
+            "signal {name}: values {values}, seen {seen}"
+        );
+    }
+    for name in ["raster.clamped", "visibility.z"] {
+        let r = rows
+            .iter()
+            .find(|r| r.0 == name)
+            .unwrap_or_else(|| panic!("{name}: {rows:?}"));
+        assert!(r.2.starts_with("not recorded"), "{r:?}");
+    }
+    // The banding map's legend and caption.
+    let (legend, caption): (Vec<String>, String) = eval_json(
+        tab,
+        "(() => { const f = Array.from(document.querySelectorAll('figure')).find(f => f.querySelector('img[alt=\"banding map\"]')); return JSON.stringify([Array.from(f.querySelectorAll('.legend span')).map(s => s.textContent), f.querySelector('figcaption').textContent]); })()",
+    );
+    assert_eq!(legend.len(), 3, "banding legend: {legend:?}");
+    assert!(
+        legend.iter().any(|l| l.contains("smooth region")),
+        "{legend:?}"
+    );
+    assert!(
+        caption.contains("0 visible contour steps found")
+            || caption.contains("beside a visible contour step"),
+        "banding caption: {caption}"
+    );
+    // The gamma LUT plot: its legend keys under the figure, no legend text inside the SVG.
+    let (keys, svg): (Vec<String>, String) = eval_json(
+        tab,
+        "(() => { const f = Array.from(document.querySelectorAll('figure')).find(f => f.querySelector('img[alt=\"gamma LUT transfer\"]')); return JSON.stringify([Array.from(f.querySelectorAll('.legend span')).map(s => s.textContent), atob(f.querySelector('img').src.split(',')[1])]); })()",
+    );
+    assert!(keys.len() >= 2, "LUT legend keys: {keys:?}");
+    assert!(svg.contains("<svg"), "the LUT plot decodes as SVG");
+    for k in &keys {
+        assert!(
+            !svg.contains(k.as_str()),
+            "the LUT plot draws its legend `{k}` over the curves"
+        );
+    }
+    // The depth-of-field truth's split table.
+    let split: Vec<Vec<String>> = eval_json(
+        tab,
+        "JSON.stringify(Array.from(document.querySelectorAll('#truth-split tr')).map(r => Array.from(r.cells).map(c => c.textContent)))",
+    );
+    if truth {
+        assert_eq!(
+            split.len(),
+            4,
+            "header + total, algorithm, quantisation: {split:?}"
+        );
+        for (row, part) in split[1..]
+            .iter()
+            .zip(["total", "algorithm", "quantisation"])
+        {
+            assert!(row[0].starts_with(part) && row.len() == 4, "{row:?}");
+            assert!(row[1..].iter().all(|c| c.contains(" / ")), "{row:?}");
+        }
+    } else {
+        assert!(split.is_empty(), "no truth, no split table: {split:?}");
+    }
+}
+
+/// The sweep page at a 1400-px window: the page does not scroll sideways (the table scrolls
+/// inside its own box, whose last column can be scrolled into view), the plot fits, and
+/// every highlighted front row's index labels a point of the Pareto plot.
+fn sweep_page_fits(tab: &Tab) {
+    let (inner, page_w, box_right, last_right, plot_w): (f64, f64, f64, f64, f64) = eval_json(
+        tab,
+        "(() => { const b = document.getElementById('rows-scroll'); b.scrollLeft = b.scrollWidth; \
+         const ths = document.querySelectorAll('#rows-table thead th'); \
+         const r = JSON.stringify([window.innerWidth, document.documentElement.scrollWidth, b.getBoundingClientRect().right, ths[ths.length - 1].getBoundingClientRect().right, document.images[0].getBoundingClientRect().width]); \
+         b.scrollLeft = 0; return r; })()",
+    );
+    assert!(inner <= 1400.0, "window {inner}");
+    assert!(
+        page_w <= inner,
+        "the page scrolls sideways: {page_w} > {inner}"
+    );
+    assert!(
+        box_right <= inner,
+        "the table's box ends at {box_right} > {inner}"
+    );
+    assert!(
+        last_right <= box_right + 1.0,
+        "the last column ends at {last_right}, past its box {box_right}"
+    );
+    assert!(plot_w <= inner, "the plot is {plot_w} px wide");
+    let (indices, svg): (Vec<String>, String) = eval_json(
+        tab,
+        "(() => { const c = Array.from(document.querySelectorAll('#rows-table thead th')).findIndex(t => t.textContent === 'index'); \
+         return JSON.stringify([Array.from(document.querySelectorAll('#rows-table tr.front')).map(r => r.cells[c].textContent), atob(document.images[0].src.split(',')[1]).replace(/\\s*\\n\\s*/g, '')]); })()",
+    );
+    assert!(!indices.is_empty());
+    for i in &indices {
+        assert!(
+            svg.contains(&format!(">#{i}<")),
+            "front row {i} is not labelled in the plot"
+        );
+    }
 }
 
 /// A colour render's page in the browser: the fixed and float images in RGB (the fixed one

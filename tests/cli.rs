@@ -354,3 +354,121 @@ fn widths_of_a_tiny_contrast_do_not_underflow() {
     );
     assert!(checks[0].recommended);
 }
+
+/// A scene argument that is no file and no embedded scene names what the user meant
+/// (issue 30): the nearest embedded name, or that a hardware preset was given as the scene;
+/// and `--hw` given a scene name or a near miss of a preset says so.
+#[test]
+fn a_mistyped_scene_or_preset_names_what_was_meant() {
+    let scenes = "default, default-pinhole, cone-focus, default-colour";
+    expect_error(
+        &["render", "cone_focus"],
+        &["`cone_focus`", "did you mean `cone-focus`", scenes],
+    );
+    expect_error(
+        &["check", "Default-Colour"],
+        &["did you mean `default-colour`"],
+    );
+    expect_error(
+        &["render", "linear8"],
+        &["`linear8` is a hardware preset", "--hw linear8", scenes],
+    );
+    let (code, _, err) = igemu(&["render", "qqqqqqqqqq"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(scenes) && !err.contains("did you mean"),
+        "{err}"
+    );
+    expect_error(&["render", "--hw", "linear-8"], &["did you mean `linear8`"]);
+    expect_error(
+        &["render", "--hw", "cone-focus"],
+        &["`cone-focus` is an embedded scene"],
+    );
+    // A path (a `/` or `.toml`) is still read as a file.
+    expect_error(&["render", "nosuch.toml"], &["nosuch.toml", "cannot read"]);
+}
+
+/// `igemu cost --json`: the table as JSON, the same numbers as the text table.
+#[test]
+fn cost_takes_json() {
+    let (code, out, err) = igemu(&["cost", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("cost --json is JSON");
+    assert_eq!(v["hardware"], "linear12");
+    assert_eq!(v["scene"], "default");
+    let stages = v["stages"].as_array().expect("stages");
+    let (code, text, err) = igemu(&["cost"]);
+    assert_eq!(code, 0, "{err}");
+    let rows: Vec<&str> = text.lines().skip(2).collect();
+    assert_eq!(stages.len(), rows.len(), "{text}");
+    for (s, row) in stages.iter().zip(&rows) {
+        let f: Vec<&str> = row.split_whitespace().collect();
+        assert_eq!(s["stage"], f[0], "{row}");
+        assert_eq!(s["storage_bits"].to_string(), f[1], "{row}");
+        assert_eq!(s["lut_bits"].to_string(), f[2], "{row}");
+        assert!(s["synth"].is_null());
+    }
+    assert!(stages.iter().any(|s| s["hdl_module"] == "gamma_lut"));
+}
+
+/// `-o /dev/null` (a special file without a `.png` extension) is written as PNG in place;
+/// `/dev/null` stays the device (no rename over it), and several outputs may share it.
+#[cfg(unix)]
+#[test]
+fn dev_null_is_an_output() {
+    use std::os::unix::fs::FileTypeExt;
+    let (code, out, err) = igemu(&[
+        "render",
+        "default-pinhole",
+        "-o",
+        "/dev/null",
+        "--diff-out",
+        "/dev/null",
+        "--report",
+        "/dev/null",
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("wrote /dev/null"), "{out}");
+    let m = std::fs::metadata("/dev/null").expect("/dev/null");
+    assert!(m.file_type().is_char_device(), "/dev/null was replaced");
+    // A regular file without an extension is still refused by its format.
+    let d = std::env::temp_dir().join(format!("igemu-cli-noext-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&d);
+    let p = d.join("image");
+    expect_error(
+        &["render", "default-pinhole", "-o", p.to_str().unwrap()],
+        &["image format", "name the file .png"],
+    );
+    assert!(!p.exists());
+}
+
+/// `igemu ranges` says why its overflow counters have no range (issue 30): the `-` rows are
+/// listed under the table, and `--json` marks them `overflow_only`.
+#[test]
+fn ranges_say_which_signals_only_count_overflows() {
+    let (code, out, err) = igemu(&["ranges"]);
+    assert_eq!(code, 0, "{err}");
+    let note = out.lines().last().expect("a last line");
+    assert!(
+        note.starts_with("-: ") && note.contains("count only their overflows"),
+        "{out}"
+    );
+    for row in out
+        .lines()
+        .filter(|l| l.split_whitespace().nth(3) == Some("-"))
+    {
+        let name = row.split_whitespace().nth(1).expect("signal");
+        assert!(
+            note.contains(name),
+            "{name} has no range and is not in: {note}"
+        );
+    }
+    let (code, json, err) = igemu(&["ranges", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: Vec<serde_json::Value> = serde_json::from_str(&json).expect("JSON");
+    for s in &v {
+        let counter = s["overflow_only"].as_bool().expect("overflow_only");
+        assert_eq!(counter, s["count"] == 0 && s["min"].is_null(), "{s}");
+        assert_eq!(counter, note.contains(s["signal"].as_str().unwrap()), "{s}");
+    }
+}

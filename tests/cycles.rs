@@ -263,6 +263,8 @@ fn vcd_trace_reads_back_to_the_reported_counts() {
 
     let mut p = vcd::Parser::new(std::io::BufReader::new(&bytes[..]));
     let header = p.parse_header().unwrap();
+    let (per, unit) = igemu::cycles::vcd::cycle_time(h.cycles.clock_mhz);
+    assert_eq!(header.timescale, Some((1, unit)));
     let code = |name: &str| header.find_var(&["igemu", name]).map(|v| v.code);
     let state_codes: Vec<_> = names
         .iter()
@@ -279,6 +281,12 @@ fn vcd_trace_reads_back_to_the_reported_counts() {
     while let Some(cmd) = p.next().transpose().unwrap() {
         match cmd {
             vcd::Command::Timestamp(t) => {
+                // Time stamps are real time: cycles times the period in the time unit.
+                assert!(
+                    t.is_multiple_of(per),
+                    "time {t} is not a whole cycle of {per} {unit}"
+                );
+                let t = t / per;
                 for i in 0..ns {
                     counts[i][state[i] as usize] += t - now;
                 }
@@ -366,7 +374,8 @@ fn vcd_trace_holds_every_simulated_cycle() {
 
     let mut p = vcd::Parser::new(&bytes[..]);
     let header = p.parse_header().unwrap();
-    assert_eq!(header.timescale, Some((1, vcd::TimescaleUnit::NS)));
+    let (per, unit) = igemu::cycles::vcd::cycle_time(h.cycles.clock_mhz);
+    assert_eq!(header.timescale, Some((1, unit)));
     let mut codes = Vec::new(); // (code, stage, is the FIFO)
     for (i, st) in wl.stages.iter().enumerate() {
         let var = |suffix: &str| header.find_var(&["igemu", &format!("{}_{suffix}", st.id.name())]);
@@ -384,6 +393,11 @@ fn vcd_trace_holds_every_simulated_cycle() {
     for cmd in p {
         match cmd.unwrap() {
             vcd::Command::Timestamp(t) => {
+                assert!(
+                    t.is_multiple_of(per),
+                    "time {t} is not a whole cycle of {per} {unit}"
+                );
+                let t = t / per;
                 assert!(now.is_none_or(|n| t > n), "time stamps increase");
                 now = Some(t);
             }
@@ -827,4 +841,39 @@ fn logdomain_and_dither_have_cycle_models() {
     assert_eq!(wo[d].kind, TokenKind::Tile);
     assert_eq!(wo[d].feeder, Some(g));
     assert_eq!(wo[d].items, wo[g].items);
+
+/// The VCD's time scale: one clock period in the largest unit that divides it, so that time
+/// stamps are real time and the header's comment and `$timescale` agree (issue 30).
+#[test]
+fn vcd_time_is_the_clock_period() {
+    use vcd::TimescaleUnit as U;
+    assert_eq!(igemu::cycles::vcd::cycle_time(100.0), (10, U::NS));
+    assert_eq!(igemu::cycles::vcd::cycle_time(1000.0), (1, U::NS));
+    assert_eq!(igemu::cycles::vcd::cycle_time(1.0), (1, U::US));
+    assert_eq!(igemu::cycles::vcd::cycle_time(400.0), (2500, U::PS));
+    // 133 MHz: 7 518 796.99 fs, rounded to the femtosecond.
+    assert_eq!(igemu::cycles::vcd::cycle_time(133.0), (7_518_797, U::FS));
+    let w = igemu::pipeline::render(
+        &igemu::scene::Scene::embedded("default-pinhole").unwrap(),
+        &HwConfig::default_config(),
+        igemu::stage::RunOptions::FAST,
+    )
+    .unwrap()
+    .workload;
+    let text = String::from_utf8(
+        VcdWriter::new(Vec::new(), &w, 100.0)
+            .unwrap()
+            .finish(7)
+            .unwrap(),
+    )
+    .unwrap();
+    assert!(
+        text.contains("1 clock cycle = 10 x $timescale 1 ns"),
+        "{text}"
+    );
+    assert!(
+        text.contains("$timescale 1 ns $end") || text.contains("$timescale\n1 ns"),
+        "{text}"
+    );
+    assert!(text.trim_end().ends_with("#70"), "{text}");
 }

@@ -7,6 +7,9 @@
 //! 2. The library never prints (`println!`, `eprintln!`, `print!`, `eprint!`, `dbg!` only in
 //!    `src/bin/`).
 //! 3. No file in `src/` is over 600 lines.
+//! 4. The binary does not depend on its source tree: no code under `src/` reads
+//!    `CARGO_MANIFEST_DIR` (the HDL models are embedded, caches go to a user cache folder;
+//!    tests/portable.rs runs a copy of the binary from `/`).
 //!
 //! Run alone with `cargo test --test structure`.
 
@@ -138,6 +141,42 @@ fn the_library_never_prints() {
         found.is_empty(),
         "the library prints:\n{}",
         found.join("\n")
+    );
+}
+
+/// The lines of `src/` code that name `var` (comments left out).
+fn code_naming(var: &str) -> Vec<String> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let mut found = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).expect("read");
+        for (n, line) in code_lines(&text) {
+            if line.contains(var) {
+                found.push(format!("{}:{n}", f.display()));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn the_binary_does_not_depend_on_its_source_tree() {
+    let found = code_naming("CARGO_MANIFEST_DIR");
+    assert!(
+        found.is_empty(),
+        "code under src/ reads the source tree's path (an installed binary has none): {found:?}"
+    );
+    // The check sees a use in code, not one in a comment.
+    assert_eq!(
+        code_lines("let d = env!(\"CARGO_MANIFEST_DIR\"); // x").len(),
+        1
+    );
+    assert!(
+        code_lines("// env!(\"CARGO_MANIFEST_DIR\")")[0]
+            .1
+            .is_empty()
     );
 }
 

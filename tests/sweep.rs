@@ -257,14 +257,15 @@ fn pareto_front_keeps_exactly_the_non_dominated_rows() {
         assert_eq!(front.contains(&i), !dominated, "row {i}");
     }
     // The plotters plot: every row grey in both panels (+ a legend dot each), each panel's
-    // front red (its points, its line and a legend line).
+    // front red (its points, their labels, its line and a legend line).
     let svg_path = d.join("p.svg").to_string_lossy().into_owned();
     sweep::plot::write(&rows, &axes, &svg_path).unwrap();
     let svg = std::fs::read_to_string(&svg_path).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     let fc = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Cost]).len();
     let ft = pareto::front(&rows, &[pareto::Axis::Error, pareto::Axis::Throughput]).len();
-    assert_eq!(svg.matches("fill=\"#FF0000\"").count(), fc + ft);
+    // Each front point red, and its `#index` label in red.
+    assert_eq!(svg.matches("fill=\"#FF0000\"").count(), 2 * (fc + ft));
     assert_eq!(svg.matches("fill=\"#969696\"").count(), 2 * rows.len() + 2);
     assert_eq!(
         svg.matches("<polyline fill=\"none\" opacity=\"1\" stroke=\"#FF0000\"")

@@ -35,6 +35,9 @@ pub struct SignalRange {
     pub narrowest: Option<String>,
     /// Overflows counted.
     pub overflows: u64,
+    /// Whether the signal is an overflow counter only (its datapath records no values, so
+    /// `count`, `min` and `max` stay empty): [`SignalStats::overflow_counter`].
+    pub overflow_only: bool,
 }
 
 /// Bits of the narrowest word with `frac` fraction bits holding `[min, max]` LSBs, as a format.
@@ -108,6 +111,7 @@ fn range_of(stage: &str, channel: Option<&'static str>, s: &SignalStats) -> Sign
             _ => None,
         },
         overflows: s.overflows,
+        overflow_only: s.overflow_only,
     }
 }
 

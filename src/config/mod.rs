@@ -182,8 +182,16 @@ impl HwConfig {
                     col: None,
                     field: String::new(),
                     msg: format!(
-                        "`{a}` is neither a preset ({}) nor a .toml file",
-                        PRESETS.join(", ")
+                        "`{a}` is neither a preset ({}) nor a .toml file{}",
+                        PRESETS.join(", "),
+                        if crate::scene::names().contains(&a) {
+                            format!(
+                                "; `{a}` is an embedded scene: give it as the SCENE argument instead of --hw"
+                            )
+                        } else {
+                            crate::files::nearest(a, PRESETS)
+                                .map_or(String::new(), |n| format!("; did you mean `{n}`?"))
+                        }
                     ),
                 }),
             },

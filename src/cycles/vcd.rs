@@ -1,18 +1,39 @@
 //! The VCD (IEEE 1364 value change dump) trace of the cycle simulation, for GTKWave, written
 //! with the `vcd` crate's writer.
 //!
-//! One time unit is one clock cycle (`$timescale 1 ns`: read "ns" as "cycles"). Per stage
+//! Time stamps are real time at the configured clock: `$timescale` is 1 of the largest unit
+//! (s, ms, us, ns, ps, fs) that divides the clock period (rounded to the femtosecond), and
+//! cycle `t` is at time `t * P`, `P` the period in that unit ([`cycle_time`]; 100 MHz: `1 ns`,
+//! `P` = 10); the header's comment says the same. Per stage
 //! `<stage>_state` (2 bits: 0 idle, 1 busy, 2 stalled, 3 starved) and, for a stage that
-//! feeds a FIFO, `<stage>_fifo` (its occupancy in tokens). The value at time `t` holds
-//! during cycle `t`; the dump ends with a time stamp equal to the frame's total cycles.
+//! feeds a FIFO, `<stage>_fifo` (its occupancy in tokens). The value at time `t * P` holds
+//! during cycle `t`; the dump ends with the time stamp of the frame's total cycles.
 
 use super::{State, Workload};
 use std::io::{self, Write};
 use vcd::{IdCode, SimulationCommand, TimescaleUnit, Value, VarType};
 
+/// The VCD time of one clock cycle at `clock_mhz`: (time units per cycle, the unit of
+/// `$timescale 1 <unit>`), the largest unit that divides the period in femtoseconds.
+pub fn cycle_time(clock_mhz: f64) -> (u64, TimescaleUnit) {
+    let fs = (1e9 / clock_mhz).round().max(1.0) as u64;
+    [
+        (1_000_000_000_000_000, TimescaleUnit::S),
+        (1_000_000_000_000, TimescaleUnit::MS),
+        (1_000_000_000, TimescaleUnit::US),
+        (1_000_000, TimescaleUnit::NS),
+        (1_000, TimescaleUnit::PS),
+    ]
+    .into_iter()
+    .find(|(d, _)| fs.is_multiple_of(*d))
+    .map_or((fs, TimescaleUnit::FS), |(d, u)| (fs / d, u))
+}
+
 /// Streams value changes to `out`.
 pub struct VcdWriter<W: Write> {
     out: W,
+    /// Time units per clock cycle ([`cycle_time`]).
+    per_cycle: u64,
     fifo: Vec<bool>,
     last_state: Vec<u8>,
     last_occ: Vec<u32>,
@@ -43,10 +64,11 @@ impl<W: Write> VcdWriter<W> {
     pub fn new(mut out: W, w: &Workload, clock_mhz: f64) -> io::Result<Self> {
         let fifo: Vec<bool> = (0..w.stages.len()).map(|i| w.has_fifo(i)).collect();
         let mut v = vcd::Writer::new(&mut out);
+        let (per_cycle, unit) = cycle_time(clock_mhz);
         v.comment(&format!(
-            "igemu cycle trace: 1 time unit = 1 clock cycle at {clock_mhz} MHz; state 0 idle, 1 busy, 2 stalled, 3 starved"
+            "igemu cycle trace at {clock_mhz} MHz: 1 clock cycle = {per_cycle} x $timescale 1 {unit} (cycle t at time {per_cycle} t); state 0 idle, 1 busy, 2 stalled, 3 starved"
         ))?;
-        v.timescale(1, TimescaleUnit::NS)?;
+        v.timescale(1, unit)?;
         v.add_module("igemu")?;
         for (i, s) in w.stages.iter().enumerate() {
             let name = s.id.name();
@@ -71,6 +93,7 @@ impl<W: Write> VcdWriter<W> {
         v.enddefinitions()?;
         Ok(Self {
             out,
+            per_cycle,
             fifo,
             last_state: vec![u8::MAX; w.stages.len()],
             last_occ: vec![u32::MAX; w.stages.len()],
@@ -90,7 +113,7 @@ impl<W: Write> VcdWriter<W> {
             let changed_s = s != self.last_state[i];
             let changed_o = self.fifo[i] && o != self.last_occ[i];
             if (changed_s || changed_o) && !stamped {
-                v.timestamp(t)?;
+                v.timestamp(t * self.per_cycle)?;
                 if !self.started {
                     v.begin(SimulationCommand::Dumpvars)?;
                 }
@@ -126,7 +149,7 @@ impl<W: Write> VcdWriter<W> {
         if let Some(e) = self.err.take() {
             return Err(e);
         }
-        vcd::Writer::new(&mut self.out).timestamp(total)?;
+        vcd::Writer::new(&mut self.out).timestamp(total * self.per_cycle)?;
         self.out.flush()?;
         Ok(self.out)
     }

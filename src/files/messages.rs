@@ -306,3 +306,16 @@ pub(super) fn line_paths(text: &str) -> Vec<LinePath> {
     }
     out
 }
+
+/// The name of `names` nearest to `word` (a mistyped name: `cone_focus` -> `cone-focus`), by
+/// the Damerau-Levenshtein distance ignoring case: `None` when none is within a third of the
+/// longer name (at least 2 edits), so an unrelated word gets no suggestion.
+pub fn nearest<'a>(word: &str, names: &[&'a str]) -> Option<&'a str> {
+    let w = word.to_ascii_lowercase();
+    names
+        .iter()
+        .map(|&n| (strsim::damerau_levenshtein(&w, &n.to_ascii_lowercase()), n))
+        .filter(|&(d, n)| d <= (w.len().max(n.len()) / 3).max(2))
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, n)| n)
+}

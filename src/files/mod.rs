@@ -6,10 +6,12 @@
 //! (or across a scene and a hardware config) runs after parsing: the value keeps its
 //! [`Source`], which locates each field it names the same way.
 
+mod cache;
 mod messages;
 mod source;
 
-pub use messages::{generic_path, num};
+pub use cache::{CACHE_ENV, cache_dir};
+pub use messages::{generic_path, nearest, num};
 pub use source::Source;
 
 use crate::error::FileError;

@@ -26,6 +26,10 @@ pub struct SignalStats {
     pub err_sum: f64,
     /// Sum of squared quantisation errors, in LSB².
     pub err_sq_sum: f64,
+    /// Whether the signal is an overflow counter only ([`SignalStats::overflow_counter`]):
+    /// its datapath counts the values the overflow mode acted on, not each value, so `count`,
+    /// `min`, `max` and the error sums stay empty by design.
+    pub overflow_only: bool,
 }
 
 impl SignalStats {
@@ -40,6 +44,17 @@ impl SignalStats {
             overflows: 0,
             err_sum: 0.0,
             err_sq_sum: 0.0,
+            overflow_only: false,
+        }
+    }
+
+    /// A signal whose datapath counts only its `overflows` (a saturating sum in a hot loop
+    /// that records no value, to stay fast): reports show why it has no values.
+    pub fn overflow_counter(name: &str, format: QFormat, overflows: u64) -> Self {
+        Self {
+            overflows,
+            overflow_only: true,
+            ..Self::new(name, format)
         }
     }
 
@@ -98,6 +113,7 @@ impl SignalStats {
         self.overflows += other.overflows;
         self.err_sum += other.err_sum;
         self.err_sq_sum += other.err_sq_sum;
+        self.overflow_only &= other.overflow_only;
     }
 
     /// Root-mean-square quantisation error in LSBs (0 when nothing was recorded).

@@ -3,7 +3,7 @@
 //! run of a built simulation and its verdict ([`SimRun`]).
 
 use super::bench::{Verdict, parse_verdict};
-use super::models_dir;
+use super::model_file;
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -44,7 +44,7 @@ pub fn run_icarus_timed(module: &str, dir: &Path) -> std::result::Result<SimRun,
 
 /// [`run_icarus_timed`] of testbench `tb` (`hdl-models/tb/<tb>.v`) of `module`.
 pub fn run_icarus_tb(tb: &str, module: &str, dir: &Path) -> std::result::Result<SimRun, String> {
-    let m = models_dir();
+    let (tb_v, rtl_v) = (model_file("tb", tb)?, model_file("rtl", module)?);
     let sim = dir.join("sim.vvp");
     let t = Instant::now();
     let c = Command::new("iverilog")
@@ -53,8 +53,8 @@ pub fn run_icarus_tb(tb: &str, module: &str, dir: &Path) -> std::result::Result<
         .arg(dir)
         .arg("-o")
         .arg(&sim)
-        .arg(m.join("tb").join(format!("{tb}.v")))
-        .arg(m.join("rtl").join(format!("{module}.v")))
+        .arg(tb_v)
+        .arg(rtl_v)
         .output()
         .map_err(|e| format!("iverilog: {e}"))?;
     if !c.status.success() {

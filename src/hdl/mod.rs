@@ -10,21 +10,23 @@
 //! `TESTBENCH OK <n> vectors` or `TESTBENCH FAILED: ...`.
 //!
 //! Files: [`bench`](mod@bench) (the bench, its files, the verdict), [`icarus`] (Icarus runs, shared
-//! simulation plumbing), `vectors/` (one vector builder per stage), [`exhaustive`] (the log
+//! simulation plumbing), [`models`] (the Verilog embedded in the binary, written out where a
+//! simulator reads it, or a `--hdl-dir` copy), `vectors/` (one vector builder per stage), [`exhaustive`] (the log
 //! adder's full pair space), [`verilator`] and [`synth`] (yosys).
 
 use crate::stage_id::StageId;
-use std::path::{Path, PathBuf};
 
 pub mod bench;
 pub mod exhaustive;
 pub mod icarus;
+pub mod models;
 pub mod synth;
 mod vectors;
 pub mod verilator;
 
 pub use bench::{Bench, Verdict, parse_verdict};
 pub use icarus::{SimRun, available, run_icarus, run_icarus_tb, run_icarus_timed};
+pub use models::{Models, model_file, models_dir, use_models};
 pub(crate) use vectors::bad;
 pub use vectors::{vectors, vectors_of_channel};
 
@@ -41,9 +43,4 @@ pub const MODULES: &[(StageId, &str)] = &[
 /// The Verilog module of a stage, if it has one.
 pub fn module_of(id: StageId) -> Option<&'static str> {
     MODULES.iter().find(|m| m.0 == id).map(|m| m.1)
-}
-
-/// The `hdl-models/` directory of the source tree.
-pub fn models_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("hdl-models")
 }

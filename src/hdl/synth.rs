@@ -2,7 +2,7 @@
 //! (gates, flip-flops; ROMs become logic), cell counts per type, cached by widths and ROM
 //! contents.
 
-use super::{Bench, models_dir};
+use super::{Bench, model_file};
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -58,7 +58,10 @@ pub fn parse_stat(module: &str, text: &str) -> Option<SynthCells> {
 /// Synthesises the bench's module at its parameters (ROM files from the bench) under
 /// `cache` (one directory per input hash); reuses a cached result.
 pub fn synth(b: &Bench, cache: &Path) -> Result<SynthCells> {
-    let rtl = models_dir().join("rtl").join(format!("{}.v", b.module));
+    let rtl = model_file("rtl", b.module).map_err(|m| Error::Io {
+        path: "HDL models".into(),
+        source: std::io::Error::other(m),
+    })?;
     let io = |p: &Path, e: std::io::Error| Error::Io {
         path: p.display().to_string(),
         source: e,

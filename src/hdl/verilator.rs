@@ -9,7 +9,7 @@
 //! simulator runs in the bench directory (it reads `vectors.hex` and the ROM files there)
 //! and prints the same verdict line as under Icarus ([`super::parse_verdict`]).
 
-use super::{SimRun, Verdict, models_dir};
+use super::{SimRun, Verdict, model_file};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -107,9 +107,7 @@ pub fn build(
     dir: &Path,
     cache: &Path,
 ) -> std::result::Result<Build, String> {
-    let m = models_dir();
-    let tb_v = m.join("tb").join(format!("{tb}.v"));
-    let rtl_v = m.join("rtl").join(format!("{module}.v"));
+    let (tb_v, rtl_v) = (model_file("tb", tb)?, model_file("rtl", module)?);
     let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
     let (tb_src, rtl_src, params) = (read(&tb_v)?, read(&rtl_v)?, read(&dir.join("params.vh"))?);
     let ver = version();

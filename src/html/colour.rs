@@ -87,13 +87,19 @@ pub fn pictures(c: &ColourRender, size: (u32, u32)) -> Vec<Picture> {
         .iter()
         .map(|k| banding_image(&k.dac, &k.contour_map, (1u32 << k.bits) - 1))
         .collect();
+    let (caption, legend) = super::images::banding_legend(
+        "each channel's banding map in its own colour plane: the output dimmed, smooth regions lifted, a channel's visible contour steps at full level in its plane (white where all three step)",
+        ch.iter()
+            .map(|k| k.contour_map.iter().filter(|&&m| m == 2).count())
+            .sum(),
+    );
     v.push(Picture::png(
         "banding map",
-        "each channel's banding map in its own colour plane: the output dimmed, smooth regions lifted, a channel's visible contour steps at full level in its plane (white where all three step)".into(),
+        caption,
         &interleave(&band),
         size,
         true,
-        Vec::new(),
+        legend,
     ));
     v
 }

@@ -91,13 +91,17 @@ pub fn plots(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
         y: "output / full scale".into(),
         size: SIZE,
     };
-    let svg = plots::curves(&f, &series).map_err(|e| plot_error("LUT", e))?;
-    v.push(svg_picture(
+    // The curves fill the plot (steep from the left, high on the right, the brightness low
+    // on the right): the legend goes under the figure.
+    let svg = plots::curves(&f, &series, None).map_err(|e| plot_error("LUT", e))?;
+    let mut lut = svg_picture(
         &f.title,
         format!("{of_r}the LUT's output against its input, both normalised (the paper's Fig. 6)"),
         svg,
         SIZE,
-    ));
+    );
+    lut.legend = plots::keys(&series);
+    v.push(lut);
     // The histogram of end-to-end code differences.
     let bars: Vec<(i64, u64)> = r
         .report
@@ -244,7 +248,8 @@ fn sigma_plot(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Option<Picture
         y: "sigma, pixels (negative in front of the focus)".into(),
         size: SIZE,
     };
-    let svg = plots::curves(&f, &series).map_err(|e| plot_error("sigma", e))?;
+    let at = Some(plotters::chart::SeriesLabelPosition::UpperLeft);
+    let svg = plots::curves(&f, &series, at).map_err(|e| plot_error("sigma", e))?;
     Ok(Some(svg_picture(
         &f.title,
         format!(

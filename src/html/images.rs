@@ -68,6 +68,38 @@ pub struct Key {
     pub label: String,
 }
 
+/// The banding map's caption and legend (the levels of [`crate::perceptual::banding_image`]):
+/// the output dimmed to grey 0..=100, smooth regions (where contours are looked for) lifted by
+/// 20, pixels beside a visible contour step white; `contour_px` such pixels. With none the
+/// caption says so, so the lifted regions are not read as defects.
+pub fn banding_legend(what: &str, contour_px: usize) -> (String, Vec<Key>) {
+    let caption = if contour_px == 0 {
+        format!(
+            "{what}. 0 visible contour steps found: no white pixel; the lighter areas are the smooth regions searched for steps, not defects"
+        )
+    } else {
+        format!("{what}. {contour_px} px beside a visible contour step (white)")
+    };
+    let key = |c: &str, l: &str| Key {
+        colour: c.into(),
+        label: l.into(),
+    };
+    (
+        caption,
+        vec![
+            key(
+                "#323232",
+                "output dimmed to grey 0..100: not smooth (edges, texture)",
+            ),
+            key(
+                "#464646",
+                "lifted by 20: a smooth region, searched for contour steps",
+            ),
+            key("#ffffff", "white: beside a visible contour step"),
+        ],
+    )
+}
+
 /// A PNG of 8-bit grey or RGB pixels as a data URI.
 pub fn png_uri(data: &[u8], width: u32, height: u32, rgb: bool) -> String {
     let mut png = Vec::new();

@@ -73,8 +73,21 @@ fn svg(
     Ok(text)
 }
 
-/// Draws `series` into one chart (SVG text).
-pub fn curves(f: &Frame, series: &[Series]) -> DrawResult<String> {
+/// The legend of `series` as the page's keys under a figure (outside the plot, so it can
+/// cover no curve).
+pub fn keys(series: &[Series]) -> Vec<super::images::Key> {
+    series
+        .iter()
+        .map(|s| super::images::Key {
+            colour: format!("#{:02x}{:02x}{:02x}", s.colour.0, s.colour.1, s.colour.2),
+            label: s.name.clone(),
+        })
+        .collect()
+}
+
+/// Draws `series` into one chart (SVG text), its legend inside at `at`, or none (`None`: the
+/// page shows [`keys`] under the figure instead).
+pub fn curves(f: &Frame, series: &[Series], at: Option<SeriesLabelPosition>) -> DrawResult<String> {
     let all = || series.iter().flat_map(|s| s.points.iter());
     svg(f, 60, |mut b| {
         let mut chart = b
@@ -112,7 +125,10 @@ pub fn curves(f: &Frame, series: &[Series]) -> DrawResult<String> {
                 .label(&s.name)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], c.stroke_width(3)));
         }
-        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(err)
+        match at {
+            Some(at) => legend(&mut chart, at).map_err(err),
+            None => Ok(()),
+        }
     })
 }
 

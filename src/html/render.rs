@@ -41,6 +41,49 @@ pub struct RenderPage {
     pub cycle_rows: Vec<Vec<String>>,
     /// Plots.
     pub plots: Vec<Picture>,
+    /// With `--dof-truth`: the errors against the truth split into algorithm and quantisation.
+    pub truth: Option<TruthSection>,
+}
+
+/// The depth-of-field truth's table: what the text report prints under `depth-of-field truth`.
+#[derive(Serialize)]
+pub struct TruthSection {
+    /// The truth's lens points, time and noise.
+    pub note: String,
+    /// Column headings after the part's name: whole image, depth-edge band, interior.
+    pub columns: [String; 3],
+    /// (part, whole, edge band, interior): `mean |diff| / RMS / max, mean Weber`.
+    pub rows: Vec<[String; 4]>,
+}
+
+/// The truth section of a render with `--dof-truth`.
+fn truth_section(t: &crate::truth::TruthReport) -> TruthSection {
+    TruthSection {
+        note: format!(
+            "{}. Each cell: DAC codes mean |diff| / RMS / max, mean Weber; total = algorithm + quantisation per pixel (signed).",
+            t.summary()
+        ),
+        columns: [
+            "whole image".into(),
+            format!(
+                "depth-edge band ({} px, {} px wide)",
+                t.edge_pixels, t.edge_band_px
+            ),
+            "interior".into(),
+        ],
+        rows: t
+            .rows()
+            .iter()
+            .map(|(name, s)| {
+                [
+                    name.to_string(),
+                    s.whole.brief(),
+                    s.edge.brief(),
+                    s.interior.brief(),
+                ]
+            })
+            .collect(),
+    }
 }
 
 /// One stage of the plan.
@@ -86,8 +129,8 @@ pub struct SignalRow {
     pub format: String,
     /// Code range of the format.
     pub range: String,
-    /// Values recorded.
-    pub count: u64,
+    /// Values recorded (`-` for an overflow counter, which records none).
+    pub count: String,
     /// Smallest and largest value seen (LSBs).
     pub seen: String,
     /// Narrowest format holding what was seen.
@@ -215,6 +258,7 @@ pub fn page(scene: &Scene, hw: &HwConfig, r: &Render) -> figures::Result<RenderP
             })
             .collect(),
         plots: figures::plots(scene, hw, r)?,
+        truth: rep.dof_truth.as_ref().map(truth_section),
     })
 }
 
@@ -229,6 +273,10 @@ fn pictures(r: &Render, w: u32, h: u32) -> Vec<Picture> {
         Some(c) => colour::pictures(c, size),
         None => {
             let band = banding_image(&r.dac, &r.contour_map, (1u32 << bits) - 1);
+            let (band_caption, band_legend) = images::banding_legend(
+                "the output dimmed, smooth regions lifted, visible contour steps white",
+                r.contour_map.iter().filter(|&&m| m == 2).count(),
+            );
             vec![
                 grey("fixed pipeline", &r.dac),
                 grey("float reference", &r.dac_ref),
@@ -243,14 +291,7 @@ fn pictures(r: &Render, w: u32, h: u32) -> Vec<Picture> {
                     &r.dac_ref,
                     size,
                 ),
-                Picture::png(
-                    "banding map",
-                    "the output dimmed, smooth regions lifted, visible contour steps white".into(),
-                    &band,
-                    size,
-                    false,
-                    Vec::new(),
-                ),
+                Picture::png("banding map", band_caption, &band, size, false, band_legend),
             ]
         }
     };
@@ -337,10 +378,15 @@ fn stage_row(s: &crate::stage::StageReport) -> StageRow {
                     name: g.name.clone(),
                     format: f.to_string(),
                     range: code_range(f),
-                    count: g.count,
+                    count: if g.overflow_only {
+                        "-".into()
+                    } else {
+                        g.count.to_string()
+                    },
                     seen: match (g.min, g.max) {
                         (Some(a), Some(b)) => format!("{a}..{b}"),
-                        _ => "-".into(),
+                        _ if g.overflow_only => "not recorded: an overflow counter (this datapath counts the values its overflow mode acts on, not every value, to stay fast)".into(),
+                        _ => "none: the stage recorded no value of this signal on this run".into(),
                     },
                     narrowest: match (g.min, g.max) {
                         (Some(a), Some(b)) => narrowest(a, b, f.frac_bits).to_string(),

@@ -192,7 +192,7 @@ pub fn page(rows: &[Row], axes: &[Axis], plot_svg: &str, source: &str) -> SweepP
         plot: Picture {
             title: "Pareto fronts".into(),
             caption: format!(
-                "{} against each panel's axis; grey: every row, a line per scene: its front on the panel's two axes",
+                "{} against each panel's axis; grey: every row, a line per scene: its front on the panel's two axes, each point labelled #index (the table's index column)",
                 axis_names.first().copied().unwrap_or("error")
             ),
             uri: images::svg_uri(plot_svg),

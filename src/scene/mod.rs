@@ -78,6 +78,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("default-colour", include_str!("default-colour.toml")),
 ];
 
+/// Every name [`Scene::embedded`] knows: the [`EMBEDDED`] files and `default-pinhole` (the
+/// default scene with a pinhole camera), in the order the README lists them.
+pub fn names() -> Vec<&'static str> {
+    let mut v: Vec<&'static str> = EMBEDDED.iter().map(|(n, _)| *n).collect();
+    v.insert(1, "default-pinhole");
+    v
+}
+
 /// A whole scene: what to draw, how to look at it and on which display.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Scene {

@@ -446,8 +446,8 @@ impl Stage for Visibility {
         }
         let order = processing_order(|i| matches!(prims.q[i], QPrim::Point { .. }), n);
         let tokens = order.iter().map(|&i| tests[i]).collect();
-        let mut zst = SignalStats::new("visibility.z", cx.hw.visibility.z.format);
-        zst.add_overflows(w.clamped);
+        let zst =
+            SignalStats::overflow_counter("visibility.z", cx.hw.visibility.z.format, w.clamped);
         let mut facts = Facts {
             work: vec![
                 ("tests", w.tests),

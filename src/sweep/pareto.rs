@@ -177,6 +177,80 @@ impl Axis {
             _ => self.key(r),
         }
     }
+
+    /// Whether the axis counts (bits, steps, codes): its values are integers.
+    pub fn is_integer(self) -> bool {
+        matches!(self, Axis::Cost | Axis::Contours | Axis::MaxError)
+    }
+
+    /// A value of this axis as text: an integer axis without decimals (`264687504`), else
+    /// four decimals; `-` where the row has no value (no truth, no colour).
+    pub fn show(self, v: f64) -> String {
+        if !v.is_finite() {
+            "-".into()
+        } else if self.is_integer() {
+            format!("{v:.0}")
+        } else {
+            format!("{v:.4}")
+        }
+    }
+
+    /// Whether the axis compares each configuration with its own float reference (the
+    /// same algorithm in f64): blind to how far a depth-of-field method is from a thin lens.
+    pub fn against_own_reference(self) -> bool {
+        matches!(
+            self,
+            Axis::Error | Axis::CodeError | Axis::MaxError | Axis::Weber | Axis::Contours
+        )
+    }
+}
+
+/// The `dof.*` fields a grid varies (values that differ between its configurations).
+pub fn varied_dof_fields(configs: &[super::grid::Config]) -> Vec<String> {
+    let mut keys: Vec<&String> = configs
+        .iter()
+        .flat_map(|c| c.fields.keys())
+        .filter(|k| k.starts_with("dof."))
+        .collect();
+    keys.sort();
+    keys.dedup();
+    keys.into_iter()
+        .filter(|k| {
+            let first = configs.first().and_then(|c| c.fields.get(*k));
+            configs.iter().any(|c| c.fields.get(*k) != first)
+        })
+        .cloned()
+        .collect()
+}
+
+/// The axes a sweep ranks on when `--axes` is not given: `error,cost`, or `truth_total,cost`
+/// when the grid varies `dof.*` fields and the truth is computed (`--dof-truth`).
+pub fn default_axes(configs: &[super::grid::Config], dof_truth: bool) -> Vec<Axis> {
+    if dof_truth && !varied_dof_fields(configs).is_empty() {
+        vec![Axis::TruthTotal, Axis::Cost]
+    } else {
+        vec![Axis::Error, Axis::Cost]
+    }
+}
+
+/// The warning of a ranking that misleads: the grid varies `dof.*` fields while an axis
+/// compares each configuration with its own float reference, so a method is measured
+/// against itself in f64 (its quantisation), not against a thin lens. `None` otherwise.
+pub fn dof_axes_warning(configs: &[super::grid::Config], axes: &[Axis]) -> Option<String> {
+    let dof = varied_dof_fields(configs);
+    let own: Vec<&str> = axes
+        .iter()
+        .filter(|a| a.against_own_reference())
+        .map(|a| a.arg())
+        .collect();
+    if dof.is_empty() || own.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "the grid varies {} but the axis {} compares each configuration with its own float reference (the same depth-of-field method in f64): it ranks quantisation, not how close a method comes to a thin lens; add --dof-truth and rank on truth_total (e.g. --axes truth_total,cost; docs/dof-truth.md)",
+        dof.join(", "),
+        own.join(", ")
+    ))
 }
 
 /// A truth metric of a row; a row without the truth (a pinhole scene, or no `--dof-truth`)

@@ -1,7 +1,8 @@
 //! The Pareto plot of a sweep (`--plot F.svg` / `F.png`), drawn with `plotters`: the first
 //! `--axes` axis (an error) against cost, against throughput and against every further
 //! `--axes` axis (e.g. `emulator_time`), one panel each; every row a grey dot, each scene's
-//! Pareto front on the panel's two axes a coloured line through its configurations.
+//! Pareto front on the panel's two axes a coloured line through its configurations, each
+//! labelled `#index` (the row's configuration index, as in the table and the printed front).
 //!
 //! Text uses DejaVu Sans, embedded (the `dejavu` crate), so a PNG renders the same on a
 //! machine without system fonts.
@@ -137,6 +138,11 @@ pub(crate) fn padded(v: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     }
 }
 
+/// A range with a quarter of its span added on top: room for the legend above the points.
+fn headroom(r: std::ops::Range<f64>) -> std::ops::Range<f64> {
+    r.start..r.end + 0.25 * (r.end - r.start)
+}
+
 /// A tick label: plain for moderate magnitudes, scientific otherwise.
 pub(crate) fn tick(v: f64) -> String {
     let a = v.abs();
@@ -175,8 +181,12 @@ fn draw<DB: DrawingBackend>(
             .y_label_area_size(70)
             .build_cartesian_2d(
                 padded(rows.iter().map(|r| x_axis.value(r))),
-                padded(rows.iter().map(|r| error.value(r))),
+                headroom(padded(rows.iter().map(|r| error.value(r)))),
             )?;
+        let x_mid = {
+            let r = chart.x_range();
+            (r.start + r.end) / 2.0
+        };
         chart
             .configure_mesh()
             .x_desc(x_axis.name())
@@ -204,13 +214,14 @@ fn draw<DB: DrawingBackend>(
             } else {
                 Palette99::pick(k).to_rgba()
             };
-            let mut pts: Vec<(f64, f64)> = idx
+            let mut front_rows: Vec<(f64, f64, usize)> = idx
                 .iter()
                 .map(|&i| &rows[i])
                 .filter(|r| r.scene == *scene)
-                .map(|r| (x_axis.value(r), error.value(r)))
+                .map(|r| (x_axis.value(r), error.value(r), r.index))
                 .collect();
-            pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            front_rows.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            let pts: Vec<(f64, f64)> = front_rows.iter().map(|p| (p.0, p.1)).collect();
             chart
                 .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))?
                 .label(format!("Pareto front: {scene}"))
@@ -218,6 +229,22 @@ fn draw<DB: DrawingBackend>(
                     PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2))
                 });
             chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, colour.filled())))?;
+            // Each front point labelled with its row index (the table's `index` column).
+            // Right of the point in the left half, left of it in the right half (inside the plot).
+            chart.draw_series(front_rows.iter().map(|&(x, y, i)| {
+                let label = format!("#{i}");
+                let dx = if x > x_mid {
+                    -6 - 7 * label.len() as i32
+                } else {
+                    6
+                };
+                EmptyElement::at((x, y))
+                    + Text::new(
+                        label,
+                        (dx, -14),
+                        ("sans-serif", 11).into_font().color(&colour),
+                    )
+            }))?;
         }
         legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }

@@ -66,6 +66,46 @@ pub struct Noise {
     pub dac: Split<Spread>,
 }
 
+impl Diff {
+    /// `mean |diff| / RMS / max, mean Weber` as the reports show it (`0.412 / 0.700 /   5, 0.00123`).
+    pub fn brief(&self) -> String {
+        format!(
+            "{:.3} / {:.3} / {:>3}, {:.5}",
+            self.mean_abs, self.rms, self.max_abs, self.weber_mean
+        )
+    }
+}
+
+impl TruthReport {
+    /// The lens points, the time and the truth's noise as the reports show them (`256 lens
+    /// points (3288 ms) | noise (standard error, 8 groups): RMS ... DAC codes (... frame LSB),
+    /// max ... codes`).
+    pub fn summary(&self) -> String {
+        let n = &self.noise;
+        format!(
+            "{} lens points ({:.0} ms{}) | noise (standard error, {} groups): RMS {:.4} DAC codes ({:.3} frame LSB), max {:.3} codes",
+            self.lens_samples,
+            self.ms,
+            if self.reused { ", reused" } else { "" },
+            n.groups,
+            n.dac.whole.rms,
+            n.frame_lsb.whole.rms,
+            n.dac.whole.max
+        )
+    }
+
+    /// The three-way split as the reports show it: (name, the part) for the total (fixed
+    /// against the truth), the algorithm (float against the truth) and the quantisation
+    /// (fixed against float).
+    pub fn rows(&self) -> [(&'static str, &Split<Diff>); 3] {
+        [
+            ("total (fixed)", &self.total),
+            ("algorithm (float)", &self.algorithm),
+            ("quantisation", &self.quantisation),
+        ]
+    }
+}
+
 /// The `dof_truth` object of the render report.
 #[derive(Clone, Debug, Serialize)]
 pub struct TruthReport {

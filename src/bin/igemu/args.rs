@@ -53,6 +53,34 @@ impl SceneArgs {
     }
 }
 
+/// Where the HDL models are read from and where caches go (`hdl vectors --run`, `cost
+/// --synth`): the binary carries its own models and never writes into a source tree.
+#[derive(Args)]
+pub struct HdlDirs {
+    /// Read the Verilog models from DIR (holding rtl/ and tb/, as hdl-models/ of the source tree) instead of the copy built into igemu.
+    #[arg(long, value_name = "DIR")]
+    pub hdl_dir: Option<String>,
+    /// The cache folder: Verilator builds, yosys counts, the built-in models written out for the simulators (default: $IGEMU_CACHE_DIR, else $XDG_CACHE_HOME/igemu, else ~/.cache/igemu).
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<String>,
+}
+
+impl HdlDirs {
+    /// Chooses the models ([`igemu::hdl::use_models`]) and returns the cache folder.
+    pub fn apply(&self) -> Result<std::path::PathBuf, Error> {
+        let cache = igemu::files::cache_dir(self.cache_dir.as_deref().map(std::path::Path::new));
+        let models = match &self.hdl_dir {
+            Some(d) => igemu::hdl::Models::Dir(d.into()),
+            None => igemu::hdl::Models::Embedded(cache.clone()),
+        };
+        igemu::hdl::use_models(models).map_err(|m| arg_error("--hdl-dir", m))?;
+        if self.hdl_dir.is_some() {
+            igemu::hdl::models_dir().map_err(|m| arg_error("--hdl-dir", m))?;
+        }
+        Ok(cache)
+    }
+}
+
 /// The depth-of-field truth flags of `render` and `sweep` (see [`igemu::truth`]).
 #[derive(Args)]
 pub struct TruthArgs {
@@ -125,15 +153,38 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
 }
 
 /// A scene: the default scene, an embedded scene name (unless a file of that name exists)
-/// or a TOML file.
+/// or a TOML file. A name that is neither (no such file, no `/`, no `.toml`) is refused
+/// naming what the user meant: a hardware preset given as the scene, or the nearest
+/// embedded name, with the list of embedded scenes.
 pub fn load_scene(arg: Option<&str>) -> Result<Scene, Error> {
-    match arg {
-        None => Ok(Scene::default_scene()),
-        Some(a) => match Scene::embedded(a) {
-            Some(s) if !std::path::Path::new(a).exists() => Ok(s),
-            _ => Ok(Scene::load(a)?),
-        },
+    let Some(a) = arg else {
+        return Ok(Scene::default_scene());
+    };
+    let exists = std::path::Path::new(a).exists();
+    match Scene::embedded(a) {
+        Some(s) if !exists => Ok(s),
+        None if !exists && !a.contains(['/', '\\']) && !a.ends_with(".toml") => {
+            Err(unknown_scene(a))
+        }
+        _ => Ok(Scene::load(a)?),
     }
+}
+
+/// The error of a scene argument that names no embedded scene and no file.
+fn unknown_scene(a: &str) -> Error {
+    let names = igemu::scene::names();
+    let list = format!(
+        "embedded scenes: {}; or give a scene TOML file",
+        names.join(", ")
+    );
+    let msg = if igemu::config::PRESETS.contains(&a) {
+        format!("`{a}` is a hardware preset, not a scene: use `--hw {a}` ({list})")
+    } else if let Some(n) = igemu::files::nearest(a, &names) {
+        format!("no embedded scene or file `{a}`: did you mean `{n}`? ({list})")
+    } else {
+        format!("no embedded scene or file `{a}` ({list})")
+    };
+    arg_error("SCENE", msg)
 }
 
 /// The configurations of a grid file (parsed and validated) and the scenes of a sweep

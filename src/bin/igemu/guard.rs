@@ -116,11 +116,13 @@ fn destination(p: &str) -> PathBuf {
     }
 }
 
-/// Refuses two outputs (flag, path) that name the same file.
+/// Refuses two outputs (flag, path) that name the same file; a special file (`/dev/null`, a
+/// FIFO: written in place, see [`igemu::output::AtomicFile`]) may take several.
 pub fn distinct_outputs(outs: &[(&str, &str)]) -> Result<(), Error> {
     let dest: Vec<PathBuf> = outs.iter().map(|(_, p)| destination(p)).collect();
+    let special = |p: &Path| std::fs::metadata(p).is_ok_and(|m| !m.is_file() && !m.is_dir());
     for j in 1..outs.len() {
-        if let Some(i) = (0..j).find(|&i| dest[i] == dest[j]) {
+        if let Some(i) = (0..j).find(|&i| dest[i] == dest[j] && !special(&dest[j])) {
             return Err(arg_error(
                 outs[j].0,
                 format!(

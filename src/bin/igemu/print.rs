@@ -315,39 +315,19 @@ pub fn print_report(r: &Report, out: &str) -> Result<(), Error> {
 
 /// The `dof_truth` block: the truth's noise and the three-way split of the errors.
 fn print_truth(t: &igemu::truth::TruthReport) -> Result<(), Error> {
-    let n = &t.noise;
-    outln!(
-        "depth-of-field truth: {} lens points ({:.0} ms{}) | noise (standard error, {} groups): RMS {:.4} DAC codes ({:.3} frame LSB), max {:.3} codes",
-        t.lens_samples,
-        t.ms,
-        if t.reused { ", reused" } else { "" },
-        n.groups,
-        n.dac.whole.rms,
-        n.frame_lsb.whole.rms,
-        n.dac.whole.max
-    );
+    outln!("depth-of-field truth: {}", t.summary());
     outln!(
         "  vs truth, DAC codes mean |diff| / RMS / max, mean Weber   whole | depth-edge band ({} px, {} px wide) | interior",
         t.edge_pixels,
         t.edge_band_px
     );
-    for (name, s) in [
-        ("total (fixed)", &t.total),
-        ("algorithm (float)", &t.algorithm),
-        ("quantisation", &t.quantisation),
-    ] {
-        let f = |d: &igemu::truth::Diff| {
-            format!(
-                "{:.3} / {:.3} / {:>3}, {:.5}",
-                d.mean_abs, d.rms, d.max_abs, d.weber_mean
-            )
-        };
+    for (name, s) in t.rows() {
         outln!(
             "  {:<18} {} | {} | {}",
             name,
-            f(&s.whole),
-            f(&s.edge),
-            f(&s.interior)
+            s.whole.brief(),
+            s.edge.brief(),
+            s.interior.brief()
         );
     }
     Ok(())
@@ -379,7 +359,7 @@ pub fn print_front(
         let r = &rows[i];
         out!("  {:>5}  {:<16}", r.index, r.scene);
         for x in axes {
-            out!("  {:>18.4}", x.value(r));
+            out!("  {:>18}", x.show(x.value(r)));
         }
         let cfg: Vec<String> = r.config.iter().map(|(k, v)| format!("{k}={v}")).collect();
         outln!("  {}", cfg.join(" "));

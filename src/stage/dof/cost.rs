@@ -331,7 +331,5 @@ pub fn width_note(frame: QFormat, n2: u32, p: &DofCfg) -> Option<String> {
 
 /// Stats record for an overflow count of a signal in `format`.
 pub fn overflow_signal_in(name: &str, format: QFormat, n: u64) -> SignalStats {
-    let mut s = SignalStats::new(name, format);
-    s.add_overflows(n);
-    s
+    SignalStats::overflow_counter(name, format, n)
 }

@@ -215,8 +215,11 @@ impl Stage for Raster {
         let order = processing_order(|i| matches!(prims[i], QPrim::Point { .. }), prims.len());
         let tokens = order.iter().map(|&i| stepped[i]).collect();
         taps.fixed.frags = Some(Arc::new(out));
-        let mut clamped = SignalStats::new("raster.clamped", cx.hw.input.intensity.format);
-        clamped.add_overflows(w.clamped);
+        let clamped = SignalStats::overflow_counter(
+            "raster.clamped",
+            cx.hw.input.intensity.format,
+            w.clamped,
+        );
         let facts = Facts {
             work: vec![
                 ("spans", w.spans),

@@ -3,7 +3,7 @@
 //! `--exhaustive`, the log adder's full pair space). On a colour render `--channel` picks
 //! the channel whose lane the vectors come from (R by default).
 
-use crate::args::{SceneArgs, SimArg, StageArg, arg_error};
+use crate::args::{HdlDirs, SceneArgs, SimArg, StageArg, arg_error};
 use crate::guard::Inputs;
 use crate::out::outln;
 use clap::{Args, Subcommand, ValueEnum};
@@ -35,7 +35,7 @@ pub struct HdlVectorsArgs {
     /// Also run the testbench (under --sim; exit 1 when it fails).
     #[arg(long)]
     pub run: bool,
-    /// Simulator for --run (Verilator builds cached in target/hdl-verilator).
+    /// Simulator for --run (Verilator builds cached in CACHE/hdl-verilator, see --cache-dir).
     #[arg(long, value_enum, default_value_t = SimArg::Icarus)]
     pub sim: SimArg,
     /// With --run, stage logdomain: the full pair space (tb_log_adder_exhaustive, one
@@ -45,6 +45,8 @@ pub struct HdlVectorsArgs {
     /// A colour render's channel: the vectors of its lane, with its word widths (default r; refused on a grey render).
     #[arg(long, value_enum)]
     pub channel: Option<ChannelArg>,
+    #[command(flatten)]
+    pub dirs: HdlDirs,
 }
 
 /// `--channel`: a colour render's channel.
@@ -89,6 +91,12 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
         ));
     }
     let channel = a.channel.map_or(0, |c| c as usize);
+    // The models and the cache before any file is written: a bad --hdl-dir is refused first.
+    let cache = if a.run {
+        a.dirs.apply()?.join("hdl-verilator")
+    } else {
+        std::path::PathBuf::new()
+    };
     let inputs = Inputs::of(&a.s);
     crate::guard::folder("--out", &a.out)?;
     let dir = Path::new(&a.out);
@@ -116,9 +124,6 @@ fn vectors(a: HdlVectorsArgs) -> Result<ExitCode, Error> {
     if !a.run {
         return Ok(ExitCode::SUCCESS);
     }
-    let cache = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("target")
-        .join("hdl-verilator");
     if a.exhaustive {
         return run_exhaustive(sim, &b, dir, &cache, &scene, &hw, &inputs);
     }

@@ -82,9 +82,9 @@ pub struct MergeArgs {
     /// Output JSON-lines file: every row of the sweep, in job order (written only when the merge is complete).
     #[arg(long)]
     pub out: String,
-    /// Axes of the Pareto front, as for `igemu sweep` (flicker needs rows with flicker metrics, truth_* need --dof-truth, delta_e, delta_e_p99 and hue_shift rows of a colour render).
-    #[arg(long, default_value = "error,cost")]
-    pub axes: String,
+    /// Axes of the Pareto front, as for `igemu sweep` (the same default; flicker needs rows with flicker metrics, truth_* need --dof-truth, delta_e, delta_e_p99 and hue_shift rows of a colour render).
+    #[arg(long)]
+    pub axes: Option<String>,
     /// Plot error vs cost and error vs throughput with the Pareto fronts (SVG or PNG, by extension).
     #[arg(long, value_name = "PARETO.svg|png")]
     pub plot: Option<String>,
@@ -122,9 +122,13 @@ fn run_merge(a: MergeArgs) -> Result<ExitCode, Error> {
     if let Some(p) = &a.plot {
         sweep::plot::PlotFormat::of(p).map_err(|m| arg_error("--plot", m))?;
     }
-    let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
-    super::sweep::check_truth_axes(&axes, a.truth.dof_truth)?;
+    let given = match &a.axes {
+        Some(x) => Some(pareto::Axis::parse_list(x).map_err(|m| arg_error("--axes", m))?),
+        None => None,
+    };
     let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
+    let axes = super::sweep::choose_axes(given, &configs, a.truth.dof_truth);
+    super::sweep::check_truth_axes(&axes, a.truth.dof_truth)?;
     let parts: Vec<merge::Part> = a
         .parts
         .iter()

@@ -63,7 +63,15 @@ pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
         "narrowest",
         "overflows"
     );
-    for s in rows {
+    // The overflow counters, each once (a colour render lists a lane's per channel).
+    let mut counters: Vec<&str> = Vec::new();
+    for s in rows.iter().filter(|s| s.overflow_only) {
+        if !counters.contains(&s.signal.as_str()) {
+            counters.push(&s.signal);
+        }
+    }
+    let counters = counters.join(", ");
+    for s in &rows {
         let opt = |v: Option<i128>| v.map_or("-".to_string(), |v| v.to_string());
         outln!(
             "{:<12} {}{:<28} {:>10} {:>14} {:>14} {:>10} {:>10}",
@@ -73,9 +81,12 @@ pub fn run(a: RangesArgs) -> Result<ExitCode, Error> {
             s.format,
             opt(s.min),
             opt(s.max),
-            s.narrowest.unwrap_or_else(|| "-".into()),
+            s.narrowest.clone().unwrap_or_else(|| "-".into()),
             s.overflows
         );
+    }
+    if !counters.is_empty() {
+        outln!("-: {counters} count only their overflows (their datapaths record no values)");
     }
     Ok(ExitCode::SUCCESS)
 }

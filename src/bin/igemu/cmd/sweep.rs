@@ -30,8 +30,9 @@ pub struct SweepArgs {
     #[arg(long, default_value_t = 1, value_parser = crate::args::int_in(1, 1024), allow_negative_numbers = true)]
     pub jobs: u32,
     /// Axes of the Pareto front, comma separated: error (mean Weber), code_error, max_error, weber, contours, cost, throughput, flicker (needs --flicker), truth_total, truth_algorithm, truth_quantisation (mean Weber against the depth-of-field truth; need --dof-truth), emulator_time (the fixed models' ms), delta_e, delta_e_p99 (CIEDE2000 mean, 99th percentile), hue_shift (mean, degrees) (a colour scene).
-    #[arg(long, default_value = "error,cost")]
-    pub axes: String,
+    /// Default: error,cost; truth_total,cost when the grid varies dof.* fields and --dof-truth is given (a dof.* grid ranked on error is warned about: that axis compares each method with its own float version).
+    #[arg(long)]
+    pub axes: Option<String>,
     /// Run every phase for every configuration (no stage reuse between configurations).
     #[arg(long)]
     pub no_reuse: bool,
@@ -70,10 +71,15 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         Some(s) => Some(shard_arg(s)?),
         None => None,
     };
-    let axes = pareto::Axis::parse_list(&a.axes).map_err(|m| arg_error("--axes", m))?;
+    let given = match &a.axes {
+        Some(x) => Some(pareto::Axis::parse_list(x).map_err(|m| arg_error("--axes", m))?),
+        None => None,
+    };
     if let Some(p) = &a.plot {
         sweep::plot::PlotFormat::of(p).map_err(|m| arg_error("--plot", m))?;
     }
+    let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
+    let axes = choose_axes(given, &configs, a.truth.dof_truth);
     if a.flicker.is_none() && axes.contains(&pareto::Axis::Flicker) {
         return Err(arg_error(
             "--axes",
@@ -81,7 +87,6 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         ));
     }
     check_truth_axes(&axes, a.truth.dof_truth)?;
-    let (configs, scenes) = crate::args::grid_and_scenes(&a.grid, &a.scenes)?;
     pareto::check_colour_axes(&axes, &configs, &scenes).map_err(|m| arg_error("--axes", m))?;
     for c in &configs {
         for s in &scenes {
@@ -164,6 +169,32 @@ fn shard_arg(s: &str) -> Result<igemu::sweep::grid::Shard, Error> {
         );
     }
     Ok(shard)
+}
+
+/// The axes of the front: those of `--axes` (`given`), else [`igemu::sweep::pareto::default_axes`]
+/// (said on stderr when they are the truth axes); a grid varying `dof.*` ranked on an axis
+/// that compares each configuration with its own float reference is warned about on stderr.
+pub fn choose_axes(
+    given: Option<Vec<igemu::sweep::pareto::Axis>>,
+    configs: &[igemu::sweep::grid::Config],
+    dof_truth: bool,
+) -> Vec<igemu::sweep::pareto::Axis> {
+    use igemu::sweep::pareto;
+    let axes = given.unwrap_or_else(|| {
+        let d = pareto::default_axes(configs, dof_truth);
+        if d.iter().any(|x| x.needs_truth()) {
+            let _ = writeln!(
+                std::io::stderr(),
+                "igemu sweep: the grid varies {}: ranking on truth_total,cost (the depth-of-field truth) by default; give --axes to choose",
+                pareto::varied_dof_fields(configs).join(", ")
+            );
+        }
+        d
+    });
+    if let Some(w) = pareto::dof_axes_warning(configs, &axes) {
+        let _ = writeln!(std::io::stderr(), "igemu sweep: warning: {w}");
+    }
+    axes
 }
 
 /// Refuses a `truth_*` axis without `--dof-truth`.
