@@ -841,6 +841,7 @@ fn logdomain_and_dither_have_cycle_models() {
     assert_eq!(wo[d].kind, TokenKind::Tile);
     assert_eq!(wo[d].feeder, Some(g));
     assert_eq!(wo[d].items, wo[g].items);
+}
 
 /// The VCD's time scale: one clock period in the largest unit that divides it, so that time
 /// stamps are real time and the header's comment and `$timescale` agree (issue 30).
