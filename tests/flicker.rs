@@ -117,5 +117,5 @@ fn cubic_filters_flicker() {
     }
     let (code, out, err) = igemu(&["flicker", "--filter", "catmull_rom", "--phases", "2"]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("CatmullRom"), "{out}");
+    assert!(out.contains("filter catmull_rom"), "{out}");
 }

@@ -81,17 +81,18 @@ impl Stage for Accumulate {
         };
         Ok(Need::yes(match hw.coding.kind {
             CodingKind::LogAdd => format!(
-                "filters the samples ({:?}, {ee}) and sums them in the log domain (coding.kind = \"log-add\")",
-                a.filter
+                "filters the samples ({}, {ee}) and sums them in the log domain (coding.kind = \"log-add\")",
+                a.filter.name()
             ),
             _ => match kernel(hw).accumulator(&a.frame) {
                 None => format!(
-                    "filters the samples ({:?}, {ee}) into the {} frame memory",
-                    a.filter, a.frame.format
+                    "filters the samples ({}, {ee}) into the {} frame memory",
+                    a.filter.name(),
+                    a.frame.format
                 ),
                 Some(q) => format!(
-                    "filters the samples ({:?}, {ee}, signed weights) into a {} accumulator (a sign bit and {} headroom bit(s) over the frame word), clamped to the {} frame memory with {}",
-                    a.filter,
+                    "filters the samples ({}, {ee}, signed weights) into a {} accumulator (a sign bit and {} headroom bit(s) over the frame word), clamped to the {} frame memory with {}",
+                    a.filter.name(),
                     q.format,
                     q.format.total_bits() - 1 - a.frame.format.total_bits(),
                     a.frame.format,

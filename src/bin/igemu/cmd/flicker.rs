@@ -47,9 +47,9 @@ pub fn run(a: FlickerArgs) -> Result<ExitCode, Error> {
         return Ok(ExitCode::SUCCESS);
     }
     outln!(
-        "flicker | hardware `{}` | filter {:?} | gamma {} {} | {}x{} phases on a {}x{} px scene",
+        "flicker | hardware `{}` | filter {} | gamma {} {} | {}x{} phases on a {}x{} px scene",
         r.hardware,
-        r.filter,
+        r.filter.name(),
         r.gamma,
         if r.gamma_correction {
             "corrected"
