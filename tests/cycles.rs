@@ -24,6 +24,15 @@ fn run(s: &Scene, h: &HwConfig) -> Render {
     render(s, h, RunOptions::FAST).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The cycle report's line of stage `name`.
+fn cycles_of(r: &Render, name: &str) -> cycles::StageCycles {
+    let c = &r.report.cycles.stages;
+    c.iter()
+        .find(|s| s.name == name)
+        .expect("a timed stage")
+        .clone()
+}
+
 fn work(r: &Render, stage: &str, key: &str) -> u64 {
     let s = r.report.stages.iter().find(|s| s.name == stage).unwrap();
     s.work.get(key).copied().unwrap_or(0)
@@ -458,7 +467,7 @@ fn thin_lens_scene_runs_dof_on_the_finished_frame_then_gamma() {
     let r = run(&s, &h);
     let c = &r.report.cycles;
     assert!(c.plan.unmodelled.is_empty(), "{:?}", c.plan.unmodelled);
-    let st = |n: &str| c.stages.iter().find(|s| s.name == n).unwrap().clone();
+    let st = |n: &str| cycles_of(&r, n);
     let (acc, dof, gamma) = (st("accumulate"), st("dof"), st("gamma"));
     // One token per layer with a box; both passes emit one sample per box pixel; two
     // samples per clock (the h and v port groups of dof_row_mac).
@@ -487,13 +496,7 @@ fn thin_lens_scene_runs_dof_on_the_finished_frame_then_gamma() {
     // Twice the lanes, half the busy cycles (each layer rounds up on its own).
     h.cycles.dof.lanes = 4;
     let r4 = run(&s, &h);
-    let d4 = r4
-        .report
-        .cycles
-        .stages
-        .iter()
-        .find(|s| s.name == "dof")
-        .unwrap();
+    let d4 = cycles_of(&r4, "dof");
     assert_eq!(d4.busy, layers.iter().map(|l| l.div_ceil(2)).sum::<u64>());
     assert!(r4.report.cycles.total_cycles < c.total_cycles);
     assert_eq!(r4.dac, r.dac);
@@ -807,7 +810,7 @@ fn logdomain_and_dither_have_cycle_models() {
         work(&r, "visibility", "tests") + (w[log].items.len() as u64 - w[vis].items.len() as u64)
     );
     assert_eq!(w[log].items.len(), w[vis].items.len());
-    let st = |n: &str| c.stages.iter().find(|x| x.name == n).unwrap().clone();
+    let st = |n: &str| cycles_of(&r, n);
     assert!(st("logdomain").busy > 0);
     // Error diffusion: raster order, one row per token; after tile-ordered gamma it waits
     // for the whole frame.
@@ -820,13 +823,7 @@ fn logdomain_and_dither_have_cycle_models() {
     // A slower loop (two clocks per pixel) doubles the dither's busy cycles.
     h.cycles.dither.ii = 2;
     let r2 = run(&s, &h);
-    let d2 = r2
-        .report
-        .cycles
-        .stages
-        .iter()
-        .find(|x| x.name == "dither")
-        .unwrap();
+    let d2 = cycles_of(&r2, "dither");
     assert_eq!(d2.busy, 2 * 640 * 480);
     // An ordered dither without depth of field: one token per binned tile behind gamma.
     let mut o = HwConfig::default_config();
