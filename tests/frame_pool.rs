@@ -51,6 +51,13 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static A: Counting = Counting;
 
+/// The tests of this file run one at a time: the allocation count is global.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Big allocations while `f` runs.
 fn count(f: impl FnOnce()) -> (usize, Vec<usize>) {
     BIG.store(0, Ordering::Relaxed);
@@ -67,6 +74,7 @@ fn count(f: impl FnOnce()) -> (usize, Vec<usize>) {
 
 #[test]
 fn from_the_second_frame_on_no_frame_sized_buffer_is_allocated() {
+    let _one_at_a_time = serial();
     let plain = HwConfig::default_config();
     // The post stages too: an ordered dither after the LUT (its extended LUT is made once
     // per run, its output plane comes from the pool).
@@ -106,5 +114,37 @@ fn from_the_second_frame_on_no_frame_sized_buffer_is_allocated() {
             );
         }
         assert!(same.iter().all(|&s| s), "{name}: the pooled frames' codes");
+    }
+}
+
+/// A pooled buffer keeps the last frame's values until a kernel overwrites them
+/// (`Pool::scratch`): a frame after a different scene on the same emulator must still give
+/// its own one-shot codes, so no kernel may leave a pixel unwritten.
+#[test]
+fn a_frame_after_another_scene_gives_its_own_codes() {
+    let _one_at_a_time = serial();
+    let plain = HwConfig::default_config();
+    let mut bayer = HwConfig::default_config();
+    bayer.dither.kind = igemu::config::DitherKind::Bayer8;
+    let mut fs = HwConfig::default_config();
+    fs.dither.kind = igemu::config::DitherKind::FloydSteinberg;
+    for (label, hw) in [
+        ("plain", &plain),
+        ("bayer8", &bayer),
+        ("floyd-steinberg", &fs),
+    ] {
+        let emu = Emulator::new();
+        for name in ["default", "default-pinhole", "cone-focus", "default"] {
+            let scene = Scene::embedded(name).expect("embedded");
+            let once = fast::emulate(&scene, hw, RunOptions::FIXED_ONLY, None).expect("runs");
+            let e = emu
+                .emulate(&scene, hw, RunOptions::FIXED_ONLY, None)
+                .expect("runs");
+            assert!(
+                e.channels == once.channels,
+                "{label}: {name} after another scene on one emulator"
+            );
+            emu.recycle(e);
+        }
     }
 }

@@ -63,6 +63,27 @@ impl Pool {
     /// An empty buffer with room for `cap` elements: the smallest kept one that holds
     /// them, else the largest kept one grown, else a new one.
     pub fn take<T: Send + 'static>(&self, cap: usize) -> Vec<T> {
+        let mut v = self.pick(cap);
+        v.clear();
+        v.reserve(cap);
+        v
+    }
+
+    /// A buffer of `n` elements for a kernel that overwrites every one of them: a kept
+    /// buffer's old elements stay as they are (no fill pass over a frame-sized plane from
+    /// the second frame on), only elements beyond its length are set to `value`.
+    pub fn scratch<T: Copy + Send + 'static>(&self, n: usize, value: T) -> Vec<T> {
+        let mut v = self.pick(n);
+        if v.len() >= n {
+            v.truncate(n);
+        } else {
+            v.resize(n, value);
+        }
+        v
+    }
+
+    /// The kept buffer [`Pool::take`] would choose for `cap` elements, as it was kept.
+    fn pick<T: Send + 'static>(&self, cap: usize) -> Vec<T> {
         let mut shelves = self.lock();
         let Some(shelf) = shelves.get_mut(&TypeId::of::<T>()) else {
             return Vec::with_capacity(cap);
@@ -75,14 +96,10 @@ impl Pool {
         let Some(j) = pick else {
             return Vec::with_capacity(cap);
         };
-        let mut v = *shelf
+        *shelf
             .swap_remove(j)
             .downcast::<Vec<T>>()
-            .expect("a shelf holds its own type");
-        drop(shelves);
-        v.clear();
-        v.reserve(cap);
-        v
+            .expect("a shelf holds its own type")
     }
 
     /// The buffer of `T`s kept last, with its elements (objects kept whole between frames,
@@ -230,6 +247,21 @@ mod tests {
         assert!(pool.take::<u16>(10).capacity() >= 10);
         pool.give(w);
         assert_eq!(pool.len(), 1);
+    }
+
+    #[test]
+    fn a_scratch_buffer_keeps_old_elements_and_fills_only_the_new_ones() {
+        let pool = Pool::new();
+        let mut v = pool.scratch(4, 0u32);
+        assert_eq!(v, [0; 4]);
+        v.copy_from_slice(&[1, 2, 3, 4]);
+        let at = v.as_ptr();
+        pool.give(v);
+        let w = pool.scratch(3, 9u32);
+        assert_eq!(w, [1, 2, 3], "no fill pass over a kept buffer");
+        assert_eq!(w.as_ptr(), at);
+        pool.give(w);
+        assert_eq!(pool.scratch(6, 9u32), [1, 2, 3, 9, 9, 9]);
     }
 
     #[test]

@@ -72,7 +72,7 @@ impl Stage for DitherStage {
                 (1u32 << (ff.int_bits - f)) - 1,
             ),
         };
-        let mut codes = cx.pool.filled(din.len(), 0u32);
+        let mut codes = cx.pool.scratch(din.len(), 0u32);
         let st = d.apply(din, width, height, s, omax, &mut codes);
         let mut facts = Facts {
             work: vec![("pixels", din.len() as u64)],

@@ -99,7 +99,7 @@ impl Stage for Gamma {
                 reduced_lut(&spec, acc_bits, f)
             });
             let addr = &taps.fixed.pixels().codes;
-            let mut codes = cx.pool.filled(addr.len(), 0u32);
+            let mut codes = cx.pool.scratch(addr.len(), 0u32);
             lookup(&lut.table, addr, 0, &mut codes);
             facts.note("monotone", lut.is_monotone());
             (Lut::Reduced(lut, f), codes, 0)
@@ -109,7 +109,7 @@ impl Stage for Gamma {
             match &frame.coding {
                 FrameCoding::Log(add) => {
                     let lut = log_gamma_lut(add, &spec);
-                    let mut codes = cx.pool.filled(acc.len(), 0u32);
+                    let mut codes = cx.pool.scratch(acc.len(), 0u32);
                     lookup(&lut, acc, 0, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("log_input_eq15", true);
@@ -120,7 +120,7 @@ impl Stage for Gamma {
                     let lut = memo(cx.memo, lut_key("extended", &spec, acc_bits, f), || {
                         extended_lut(&spec, acc_bits, f)
                     });
-                    let mut codes = cx.pool.filled(acc.len(), 0u32);
+                    let mut codes = cx.pool.scratch(acc.len(), 0u32);
                     lookup(&lut, acc, frac, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
@@ -130,7 +130,7 @@ impl Stage for Gamma {
                     let lut = memo(cx.memo, lut_key("plain", &spec, acc_bits, 0), || {
                         GammaLut::build(&spec, acc_bits)
                     });
-                    let mut codes = cx.pool.filled(acc.len(), 0u32);
+                    let mut codes = cx.pool.scratch(acc.len(), 0u32);
                     lut.apply_u32(acc, frac, &mut codes);
                     facts.note("monotone", lut.is_monotone());
                     let unreachable = lut.unreachable_codes();
