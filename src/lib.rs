@@ -39,6 +39,7 @@ pub mod perceptual;
 pub mod pipeline;
 pub mod rng;
 pub mod scene;
+pub mod sequence;
 pub mod stage;
 pub mod stage_id;
 pub mod sweep;

@@ -288,10 +288,7 @@ where
 pub fn write_dac(path: &str, codes: &[u16], width: u32, height: u32, bits: u32) -> Result<()> {
     let max = ((1u32 << bits) - 1) as f64;
     if bits <= 8 {
-        let data: Vec<u8> = codes
-            .iter()
-            .map(|&c| (c as f64 * 255.0 / max).round() as u8)
-            .collect();
+        let data = dac_to_u8(codes, bits);
         save(
             ImageBuffer::<Luma<u8>, _>::from_raw(width, height, data).expect("size matches"),
             path,
@@ -398,4 +395,90 @@ pub fn write_raw8(path: &str, data: &[u8], width: u32, height: u32) -> Result<()
         ImageBuffer::<Luma<u8>, _>::from_raw(width, height, data.to_vec()).expect("size matches"),
         path,
     )
+}
+
+/// A writer the PNG encoder owns that appends to a buffer the caller keeps.
+#[derive(Clone, Default)]
+struct Shared(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+impl Write for Shared {
+    fn write(&mut self, b: &[u8]) -> io::Result<usize> {
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// An animated PNG (APNG) of 8-bit grey frames: encoded frame by frame as they come, then
+/// written atomically by [`Apng::finish`] (a run that stops early leaves no file).
+pub struct Apng {
+    path: String,
+    buf: Shared,
+    writer: png::Writer<Shared>,
+    size: usize,
+}
+
+impl Apng {
+    /// An APNG of `frames` frames of `width x height` shown at `rate_hz`, looping.
+    pub fn new(path: &str, width: u32, height: u32, frames: u32, rate_hz: f64) -> Result<Apng> {
+        let err = |e: png::EncodingError| Error::Image {
+            path: path.into(),
+            msg: e.to_string(),
+        };
+        let buf = Shared::default();
+        let mut enc = png::Encoder::new(buf.clone(), width, height);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_animated(frames, 0).map_err(err)?;
+        // The delay num / den s: exact for rates with two decimals up to 655 Hz.
+        let (num, den) = if rate_hz * 100.0 <= u16::MAX as f64 {
+            (100, (rate_hz * 100.0).round() as u16)
+        } else {
+            (1, rate_hz.round().min(u16::MAX as f64) as u16)
+        };
+        enc.set_frame_delay(num, den.max(1)).map_err(err)?;
+        let writer = enc.write_header().map_err(err)?;
+        Ok(Apng {
+            path: path.into(),
+            buf,
+            writer,
+            size: width as usize * height as usize,
+        })
+    }
+
+    /// Adds the next frame (`width x height` grey values, row-major).
+    pub fn frame(&mut self, data: &[u8]) -> Result<()> {
+        assert_eq!(data.len(), self.size, "an APNG frame of the announced size");
+        self.writer
+            .write_image_data(data)
+            .map_err(|e| Error::Image {
+                path: self.path.clone(),
+                msg: e.to_string(),
+            })
+    }
+
+    /// Ends the stream and writes the file (every announced frame must have been added).
+    pub fn finish(self) -> Result<()> {
+        let path = self.path;
+        self.writer.finish().map_err(|e| Error::Image {
+            path: path.clone(),
+            msg: e.to_string(),
+        })?;
+        let bytes = std::mem::take(&mut *self.buf.0.lock().unwrap_or_else(|e| e.into_inner()));
+        write_file(&path, bytes)
+    }
+}
+
+/// DAC codes of `bits` width as 8-bit grey values (as [`write_dac`] scales them).
+pub fn dac_to_u8(codes: &[u16], bits: u32) -> Vec<u8> {
+    let max = ((1u32 << bits) - 1) as f64;
+    codes
+        .iter()
+        .map(|&c| (c as f64 * 255.0 / max).round() as u8)
+        .collect()
 }

@@ -25,7 +25,7 @@ const LAYERS: &[&[&str]] = &[
     &["stage"],
     &["compare", "perceptual", "colour", "cycles", "cost", "truth"],
     &["pipeline"],
-    &["analysis", "sweep", "hdl", "html"],
+    &["analysis", "sweep", "sequence", "hdl", "html"],
 ];
 
 fn layer_of(module: &str) -> Option<usize> {

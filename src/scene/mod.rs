@@ -18,6 +18,7 @@
 //! * Screen depth z is affine in screen space: `z = (1/near - 1/d) / (1/near - 1/far)` with
 //!   d the view-space depth (distance along the view axis), so z = 0 at near and 1 at far.
 
+mod anim;
 mod parse;
 mod project;
 mod shade;
@@ -28,6 +29,7 @@ use crate::error::FileError;
 use crate::files::{Source, TomlFile};
 use serde::Serialize;
 
+pub use anim::{CameraKey, Interpolation, ObjectKey, Sequence, interpolate};
 pub use project::{
     LensPoint, depth_from_screen_z, front_end, front_end_in, front_end_through, screen_z,
 };
@@ -76,6 +78,7 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     ("default", include_str!("default.toml")),
     ("cone-focus", include_str!("cone-focus.toml")),
     ("default-colour", include_str!("default-colour.toml")),
+    ("flypast", include_str!("flypast.toml")),
 ];
 
 /// Every name [`Scene::embedded`] knows: the [`EMBEDDED`] files and `default-pinhole` (the
@@ -103,6 +106,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Objects, drawn in this order.
     pub objects: Vec<Object>,
+    /// The keyframes of an animated scene (`[sequence]`; [`Scene::frame`] gives a frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<Sequence>,
     /// The file it was read from: later checks locate its fields ([`Scene::error`]).
     #[serde(skip)]
     pub source: Source,

@@ -17,6 +17,7 @@ use serde::Deserialize;
 
 mod objects;
 mod schema;
+mod sequence;
 
 use objects::{RawObject, object};
 pub(crate) use schema::hint;
@@ -39,6 +40,7 @@ struct RawScene {
     light: Vec<RawLight>,
     #[serde(default)]
     object: Vec<RawObject>,
+    sequence: Option<sequence::RawSequence>,
 }
 
 #[derive(Deserialize)]
@@ -243,6 +245,11 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         .map(|(k, o)| object(&c, &format!("object[{k}]"), o, (image.width, image.height)))
         .collect::<R<Vec<_>>>()?;
     primitives(&c, &objects)?;
+    let sequence = raw
+        .sequence
+        .as_ref()
+        .map(|q| sequence::sequence(&c, q, &camera, &objects, display.refresh_hz))
+        .transpose()?;
     let image = ImageSpec {
         colour: raw.image.colour.unwrap_or(c.coloured.get()),
         ..image
@@ -255,6 +262,7 @@ pub(super) fn scene_from_toml(file: &TomlFile) -> R<Scene> {
         shading,
         lights,
         objects,
+        sequence,
         source: crate::files::Source::file(file, None),
     })
 }

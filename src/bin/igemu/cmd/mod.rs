@@ -11,5 +11,6 @@ pub mod hdl;
 pub mod merge;
 pub mod ranges;
 pub mod render;
+pub mod sequence;
 pub mod sweep;
 pub mod widths;

@@ -1,0 +1,388 @@
+//! Sequences: every frame of an animated scene (`[sequence]`, [`Scene::frame`]) through the
+//! fixed pipeline and, unless asked not to, its float reference; per frame the error
+//! figures, the cycle count and the frame time at the clock against the sequence's period;
+//! over the sequence the worst frame, the frames that miss the period, percentiles and the
+//! temporal metrics ([`temporal`]). docs/sequence.md.
+//!
+//! Reuse: the frames share one stage cache ([`Cache`]), so a stage whose inputs are the
+//! same as in an earlier frame (every stage of a frame in which nothing moved) is not run
+//! again; the codes are those of a fresh emulation (the cache returns the identical
+//! outcome). The reuse is per stage over the whole screen: a frame in which anything moves
+//! is emulated from the first stage whose input changed, on every tile.
+
+pub mod temporal;
+
+use crate::compare::DisplayModel;
+use crate::config::HwConfig;
+use crate::error::Result;
+use crate::pipeline::{self, Cache, fast};
+use crate::scene::{GuardBand, Primitive, Scene, front_end};
+use crate::stage::{RunOptions, StageId, taps::PixelTapF};
+use serde::Serialize;
+use std::ops::Range;
+use std::time::Instant;
+use temporal::{MARGIN, SMALL, THIN, Temporal, TemporalReport, Window};
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct SequenceOptions {
+    /// Frames to run (within the scene's `0..frames`).
+    pub frames: Range<u32>,
+    /// Run the float reference beside the fixed model (error figures, excess flicker).
+    pub reference: bool,
+    /// Share a stage cache between the frames.
+    pub reuse: bool,
+}
+
+/// One frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameRecord {
+    /// Frame number.
+    pub frame: u32,
+    /// Cycles of the frame.
+    pub cycles: u64,
+    /// Frame time at the clock, ms.
+    pub frame_ms: f64,
+    /// Frames per second at the clock.
+    pub fps: f64,
+    /// Stage with the most busy cycles.
+    pub bottleneck: String,
+    /// Whether the frame takes longer than the sequence's period.
+    pub misses_period: bool,
+    /// Fraction of DAC codes identical to the reference (with a reference).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub identical_fraction: Option<f64>,
+    /// Largest |fixed - reference| DAC code.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_abs_diff: Option<u32>,
+    /// Largest luminance difference in Weber units.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub weber_max: Option<f64>,
+    /// Stages whose outcome came from an earlier frame.
+    pub reused_stages: u64,
+    /// Stages run for this frame.
+    pub emulated_stages: u64,
+    /// Wall time of the frame's emulation, ms.
+    pub wall_ms: f64,
+}
+
+/// The sequence's throughput against its period.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Frames run.
+    pub frames: u32,
+    /// The sequence's rate, Hz.
+    pub rate_hz: f64,
+    /// Clock, MHz.
+    pub clock_mhz: f64,
+    /// Cycles in one period at the clock.
+    pub period_cycles: f64,
+    /// Most cycles of a frame.
+    pub worst_cycles: u64,
+    /// The frame with the most cycles (the first of equals).
+    pub worst_frame: u32,
+    /// Worst frame's time at the clock, ms.
+    pub worst_frame_ms: f64,
+    /// Frames that miss the period.
+    pub missed: u32,
+    /// `missed / frames`.
+    pub missed_fraction: f64,
+    /// Mean cycles.
+    pub mean_cycles: f64,
+    /// Median, 95th and 99th percentile of the cycles (nearest rank).
+    pub p50_cycles: u64,
+    /// 95th percentile.
+    pub p95_cycles: u64,
+    /// 99th percentile.
+    pub p99_cycles: u64,
+}
+
+/// Reuse between frames.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReuseReport {
+    /// Whether frames shared a stage cache.
+    pub enabled: bool,
+    /// Whether the camera moves (then no stage output repeats).
+    pub camera_moves: bool,
+    /// Frames after the first that ran no stage (every stage reused).
+    pub frames_fully_reused: u32,
+    /// Stage runs over the sequence.
+    pub stages_emulated: u64,
+    /// Stage outcomes reused over the sequence.
+    pub stages_reused: u64,
+    /// Emulation wall time over all frames, s.
+    pub wall_s: f64,
+    /// Frames per second of emulation (frames / wall time).
+    pub frames_per_s: f64,
+}
+
+/// The report of `igemu sequence`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SequenceReport {
+    /// Tool version.
+    pub igemu_version: String,
+    /// Scene name.
+    pub scene: String,
+    /// Hardware name.
+    pub hardware: String,
+    /// The accumulate filter.
+    pub filter: String,
+    /// Screen.
+    pub width: u32,
+    /// Screen.
+    pub height: u32,
+    /// First frame run.
+    pub first: u32,
+    /// Frames of the whole sequence.
+    pub sequence_frames: u32,
+    /// Whether a float reference ran.
+    pub reference: bool,
+    /// Per frame.
+    pub frames: Vec<FrameRecord>,
+    /// Over the frames.
+    pub summary: Summary,
+    /// Temporal metrics.
+    pub temporal: TemporalReport,
+    /// Reuse between frames.
+    pub reuse: ReuseReport,
+}
+
+/// A frame's images, handed to the caller as they are made (an APNG writer).
+pub struct FrameImages<'a> {
+    /// Frame number.
+    pub frame: u32,
+    /// Fixed DAC codes, row-major.
+    pub fixed: &'a [u16],
+    /// Reference DAC codes.
+    pub reference: Option<&'a [u16]>,
+}
+
+/// The screen box of object `o` in `scene` (a still frame), grown by [`MARGIN`] and cut to
+/// the screen; `None` when it draws nothing on the screen or is neither small nor thin (its
+/// box's short side above [`SMALL`] or its long side above [`THIN`]).
+fn small_window(scene: &Scene, o: usize) -> Option<Window> {
+    let mut one = scene.clone();
+    one.objects = vec![scene.objects[o].clone()];
+    let (w, h) = (scene.image.width, scene.image.height);
+    let host = front_end(&one, &GuardBand::around(w, h, 0.0));
+    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    let mut grow = |x: f64, y: f64, r: f64| {
+        x0 = x0.min(x - r);
+        y0 = y0.min(y - r);
+        x1 = x1.max(x + r);
+        y1 = y1.max(y + r);
+    };
+    for p in &host.prims {
+        match p {
+            Primitive::Triangle(v) => v.iter().for_each(|v| grow(v.x, v.y, 0.0)),
+            Primitive::Line { a, b, width } => {
+                grow(a.x, a.y, width / 2.0);
+                grow(b.x, b.y, width / 2.0);
+            }
+            Primitive::Point { v, size } => grow(v.x, v.y, size / 2.0),
+        }
+    }
+    let (bw, bh) = (x1 - x0, y1 - y0);
+    if host.prims.is_empty() || bw.min(bh) > SMALL || bw.max(bh) > THIN {
+        return None;
+    }
+    let cut = |v: f64, m: i64, hi: u32| (v.floor() as i64 + m).clamp(0, i64::from(hi)) as u32;
+    let win = Window {
+        x0: cut(x0, -MARGIN, w),
+        y0: cut(y0, -MARGIN, h),
+        x1: cut(x1.ceil(), MARGIN, w),
+        y1: cut(y1.ceil(), MARGIN, h),
+    };
+    (win.x1 > win.x0 + 2 && win.y1 > win.y0 + 2).then_some(win)
+}
+
+fn percentile(sorted: &[u64], p: f64) -> u64 {
+    let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
+    sorted[rank.clamp(1, sorted.len()) - 1]
+}
+
+/// Runs frames `o.frames` of `scene`'s sequence on `hw`, handing each frame's images to
+/// `on_frame` as they are made.
+pub fn run(
+    scene: &Scene,
+    hw: &HwConfig,
+    o: &SequenceOptions,
+    on_frame: &mut dyn FnMut(&FrameImages) -> Result<()>,
+) -> Result<SequenceReport> {
+    let Some(seq) = &scene.sequence else {
+        return Err(scene
+            .error(
+                "sequence",
+                "the scene has no [sequence] table: add one with `frames = N` and keys (docs/sequence.md), or run `igemu sequence flypast`",
+            )
+            .into());
+    };
+    if scene.image.colour {
+        return Err(scene
+            .error(
+                "image.colour",
+                "`igemu sequence` runs grey scenes only so far; set colour = false (or give grey intensities) to run this sequence",
+            )
+            .into());
+    }
+    if o.frames.start >= o.frames.end || o.frames.end > seq.frames {
+        let msg = format!(
+            "--frames {}..{} is not a non-empty range within the sequence's frames 0..{}",
+            o.frames.start, o.frames.end, seq.frames
+        );
+        return Err(scene.error("sequence.frames", msg).into());
+    }
+    // The small moving objects: small in every frame run.
+    let frames: Vec<Scene> = o
+        .frames
+        .clone()
+        .map(|f| scene.frame(f))
+        .collect::<std::result::Result<_, _>>()?;
+    let small: Vec<usize> = seq
+        .moving_objects()
+        .into_iter()
+        .filter(|&k| frames.iter().all(|s| small_window(s, k).is_some()))
+        .collect();
+    let kinds = small
+        .iter()
+        .map(|&k| {
+            let v = serde_json::to_value(&scene.objects[k]).unwrap_or_default();
+            (k, v["kind"].as_str().unwrap_or("object").to_string())
+        })
+        .collect();
+    let model = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
+    let temporal_dither = o.reference && hw.dither.temporal;
+    let mut temporal = Temporal::new(&model, scene.image.width, kinds, temporal_dither);
+    let cache = o.reuse.then(Cache::new);
+    let emulator = fast::Emulator::new();
+    let period_ms = 1e3 / seq.rate_hz;
+    let mut records = Vec::with_capacity(frames.len());
+    let t_all = Instant::now();
+    for (f, fs) in o.frames.clone().zip(&frames) {
+        let windows: Vec<Window> = small
+            .iter()
+            .map(|&k| small_window(fs, k).expect("small in every frame"))
+            .collect();
+        let (h0, m0) = cache.as_ref().map_or((0, 0), Cache::stats);
+        let t = Instant::now();
+        let (cycles, codes, reference, ideal, errors) = if o.reference {
+            let r = pipeline::render_with(fs, hw, RunOptions::FAST, cache.as_ref())?;
+            let ideal = if temporal_dither {
+                match r.taps(StageId::Gamma).map(|t| t.float.pixels()) {
+                    Some(PixelTapF::Values(v)) => Some(v.clone()),
+                    _ => None,
+                }
+            } else {
+                None
+            };
+            let c = &r.report.end_to_end;
+            let errors = (
+                c.codes.identical_fraction,
+                c.codes.max_abs_diff,
+                c.weber.max,
+            );
+            (
+                r.report.cycles.clone(),
+                r.dac,
+                Some(r.dac_ref),
+                ideal,
+                Some(errors),
+            )
+        } else {
+            let e = emulator.emulate(fs, hw, RunOptions::FIXED_ONLY, cache.as_ref())?;
+            let out = (
+                e.report.cycles.clone(),
+                e.channels[0].clone(),
+                None,
+                None,
+                None,
+            );
+            emulator.recycle(e);
+            out
+        };
+        let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+        let (h1, m1) = cache.as_ref().map_or((0, 0), Cache::stats);
+        let stages = cycles.plan.stages.len() as u64;
+        let (reused, emulated) = if cache.is_some() {
+            (h1 - h0, m1 - m0)
+        } else {
+            (0, stages)
+        };
+        temporal.add(f, &codes, reference.as_deref(), &windows, ideal.as_deref());
+        on_frame(&FrameImages {
+            frame: f,
+            fixed: &codes,
+            reference: reference.as_deref(),
+        })?;
+        let th = &cycles.throughput;
+        records.push(FrameRecord {
+            frame: f,
+            cycles: cycles.total_cycles,
+            frame_ms: th.frame_ms,
+            fps: th.fps,
+            bottleneck: cycles.bottleneck.clone(),
+            misses_period: th.frame_ms > period_ms,
+            identical_fraction: errors.map(|e| e.0),
+            max_abs_diff: errors.map(|e| e.1),
+            weber_max: errors.map(|e| e.2),
+            reused_stages: reused,
+            emulated_stages: emulated,
+            wall_ms,
+        });
+    }
+    let wall_s = t_all.elapsed().as_secs_f64();
+    let n = records.len() as u32;
+    let mut sorted: Vec<u64> = records.iter().map(|r| r.cycles).collect();
+    sorted.sort_unstable();
+    let worst = records
+        .iter()
+        .fold(&records[0], |w, r| if r.cycles > w.cycles { r } else { w });
+    let missed = records.iter().filter(|r| r.misses_period).count() as u32;
+    let clock_mhz = hw.cycles.clock_mhz;
+    let summary = Summary {
+        frames: n,
+        rate_hz: seq.rate_hz,
+        clock_mhz,
+        period_cycles: clock_mhz * 1e6 / seq.rate_hz,
+        worst_cycles: worst.cycles,
+        worst_frame: worst.frame,
+        worst_frame_ms: worst.frame_ms,
+        missed,
+        missed_fraction: missed as f64 / n as f64,
+        mean_cycles: sorted.iter().sum::<u64>() as f64 / n as f64,
+        p50_cycles: percentile(&sorted, 50.0),
+        p95_cycles: percentile(&sorted, 95.0),
+        p99_cycles: percentile(&sorted, 99.0),
+    };
+    let reuse = ReuseReport {
+        enabled: o.reuse,
+        camera_moves: !seq.camera.is_empty() && {
+            let c0 = &frames[0].camera;
+            frames.iter().any(|s| s.camera != *c0)
+        },
+        frames_fully_reused: records
+            .iter()
+            .skip(1)
+            .filter(|r| r.emulated_stages == 0)
+            .count() as u32,
+        stages_emulated: records.iter().map(|r| r.emulated_stages).sum(),
+        stages_reused: records.iter().map(|r| r.reused_stages).sum(),
+        wall_s,
+        frames_per_s: n as f64 / wall_s.max(1e-9),
+    };
+    Ok(SequenceReport {
+        igemu_version: env!("CARGO_PKG_VERSION").to_string(),
+        scene: scene.name.clone(),
+        hardware: hw.name.clone(),
+        filter: hw.accumulate.filter.name().to_string(),
+        width: scene.image.width,
+        height: scene.image.height,
+        first: o.frames.start,
+        sequence_frames: seq.frames,
+        reference: o.reference,
+        frames: records,
+        summary,
+        temporal: temporal.finish(),
+        reuse,
+    })
+}

@@ -1,0 +1,410 @@
+//! Temporal metrics of a sequence, accumulated frame by frame (one frame pair in memory):
+//! the per-pixel flicker the fixed model adds to the motion, the flicker of each small
+//! moving object, and what a temporal dither averages to over the frames (docs/sequence.md).
+//!
+//! * **Per-pixel excess flicker**: between consecutive frames, the change of a pixel's
+//!   displayed luminance in the fixed output minus its change in the float reference, in
+//!   Weber units: `|dL_fixed - dL_ref| / (delta max(L_ref(t-1), L_ref(t)))`. Above 1 the
+//!   fixed model's own flicker is a visible step at that pixel's luminance.
+//! * **Small objects** (the width paper's flicker figures, on the real motion): per moving
+//!   object whose screen box stays small or thin ([`SMALL`], [`THIN`]), its total displayed luminance
+//!   above the background `T(t)` over a window of the box grown by [`MARGIN`] pixels (the
+//!   background level: the median code of the window's border), and its peak pixel `P(t)`.
+//!   Reported: the ripple `(max T - min T) / mean T` and the peak-pixel modulation
+//!   `(max P - min P) / max P`, fixed and reference.
+//! * **Temporal dither**: over the pixels whose reference value does not change in the
+//!   sequence, the mean of the fixed codes over the frames against that value (does the
+//!   dither average to it?), and how many of those pixels step by a visible Weber fraction
+//!   from frame to frame (its own flicker at the sequence's rate).
+
+use crate::compare::DisplayModel;
+use serde::Serialize;
+
+/// Largest short side of a small or thin object's screen box, pixels.
+pub const SMALL: f64 = 16.0;
+/// Largest long side of a thin object's screen box (a wire, a runway edge), pixels.
+pub const THIN: f64 = 128.0;
+/// Pixels added around a small object's box for its window (the filter's and the blur's
+/// reach).
+pub const MARGIN: i64 = 3;
+
+/// A pixel window `[x0, x1) x [y0, y1)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Window {
+    /// Left.
+    pub x0: u32,
+    /// Top.
+    pub y0: u32,
+    /// Right (exclusive).
+    pub x1: u32,
+    /// Bottom (exclusive).
+    pub y1: u32,
+}
+
+/// One small object over the frames.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ObjectFlicker {
+    /// Index in `[[object]]`.
+    pub object: usize,
+    /// Its kind.
+    pub kind: String,
+    /// Total displayed luminance above the background per frame, fixed (cd/m² summed).
+    pub total_fixed: Vec<f64>,
+    /// The same, float reference (empty without one).
+    pub total_reference: Vec<f64>,
+    /// Peak pixel above the background per frame, fixed.
+    pub peak_fixed: Vec<f64>,
+    /// The same, float reference.
+    pub peak_reference: Vec<f64>,
+    /// `(max T - min T) / mean T` in %, fixed.
+    pub ripple_fixed_pct: f64,
+    /// The same, reference.
+    pub ripple_reference_pct: Option<f64>,
+    /// `(max P - min P) / max P` in %, fixed.
+    pub peak_modulation_fixed_pct: f64,
+    /// The same, reference.
+    pub peak_modulation_reference_pct: Option<f64>,
+}
+
+/// Per-pixel excess flicker between two consecutive frames.
+#[derive(Clone, Debug, Serialize)]
+pub struct PairFlicker {
+    /// The later frame.
+    pub frame: u32,
+    /// Largest excess, Weber units.
+    pub max_weber: f64,
+    /// Mean excess over the pixels, Weber units.
+    pub mean_weber: f64,
+    /// Pixels whose excess is above 1 (a visible step the reference does not make).
+    pub visible_pixels: u64,
+}
+
+/// Temporal dither over the static pixels.
+#[derive(Clone, Debug, Serialize)]
+pub struct DitherTemporal {
+    /// Pixels whose reference value is the same in every frame.
+    pub static_pixels: u64,
+    /// Largest |mean of the fixed codes over the frames - the reference value|, DAC codes.
+    pub max_mean_error: f64,
+    /// Mean of the same over the static pixels.
+    pub mean_mean_error: f64,
+    /// Static pixels whose fixed code steps by more than a Weber fraction between frames.
+    pub flickering_pixels: u64,
+    /// Frames averaged.
+    pub frames: u32,
+}
+
+/// The temporal section of a sequence report.
+#[derive(Clone, Debug, Serialize)]
+pub struct TemporalReport {
+    /// Frame pairs compared.
+    pub pairs: u64,
+    /// Largest per-pixel excess flicker over the sequence, Weber units (`None`: no reference).
+    pub max_excess_weber: Option<f64>,
+    /// Mean per-pixel excess over all pairs and pixels.
+    pub mean_excess_weber: Option<f64>,
+    /// Pixel changes above 1 Weber unit that the reference does not make, over all pairs.
+    pub visible_excess: u64,
+    /// Per pair (empty without a reference).
+    pub per_pair: Vec<PairFlicker>,
+    /// The small moving objects.
+    pub objects: Vec<ObjectFlicker>,
+    /// The temporal dither (`None` unless `dither.temporal`).
+    pub dither: Option<DitherTemporal>,
+}
+
+/// The accumulator of [`TemporalReport`].
+pub struct Temporal {
+    lum: Vec<f64>,
+    weber: f64,
+    width: u32,
+    prev: Option<(Vec<u16>, Option<Vec<u16>>)>,
+    pairs: Vec<PairFlicker>,
+    sum: f64,
+    count: u64,
+    objects: Vec<ObjectFlicker>,
+    dither: Option<DitherAcc>,
+}
+
+struct DitherAcc {
+    ideal: Vec<f64>,
+    moved: Vec<bool>,
+    sum: Vec<u32>,
+    lo: Vec<u16>,
+    hi: Vec<u16>,
+    frames: u32,
+}
+
+fn ripple(v: &[f64]) -> f64 {
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+    if mean > 0.0 {
+        100.0 * (hi - lo) / mean
+    } else {
+        0.0
+    }
+}
+
+fn modulation(v: &[f64]) -> f64 {
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    if hi > 0.0 {
+        100.0 * (hi - lo) / hi
+    } else {
+        0.0
+    }
+}
+
+impl Temporal {
+    /// An accumulator for frames of `width` pixels per row on display `model`, following the
+    /// small objects `objects` (index, kind), with the temporal dither's sums when `dither`.
+    pub fn new(
+        model: &DisplayModel,
+        width: u32,
+        objects: Vec<(usize, String)>,
+        dither: bool,
+    ) -> Self {
+        Self {
+            lum: model.luminance_table(),
+            weber: model.weber,
+            width,
+            prev: None,
+            pairs: Vec::new(),
+            sum: 0.0,
+            count: 0,
+            objects: objects
+                .into_iter()
+                .map(|(object, kind)| ObjectFlicker {
+                    object,
+                    kind,
+                    ..ObjectFlicker::default()
+                })
+                .collect(),
+            dither: dither.then(|| DitherAcc {
+                ideal: Vec::new(),
+                moved: Vec::new(),
+                sum: Vec::new(),
+                lo: Vec::new(),
+                hi: Vec::new(),
+                frames: 0,
+            }),
+        }
+    }
+
+    /// Total luminance above the background and the peak over window `w` of `codes`.
+    fn window(&self, codes: &[u16], w: Window) -> (f64, f64) {
+        let at = |x: u32, y: u32| codes[(y * self.width + x) as usize];
+        let mut ring: Vec<u16> = Vec::new();
+        for y in w.y0..w.y1 {
+            for x in w.x0..w.x1 {
+                if y == w.y0 || y + 1 == w.y1 || x == w.x0 || x + 1 == w.x1 {
+                    ring.push(at(x, y));
+                }
+            }
+        }
+        ring.sort_unstable();
+        let bg = self.lum[ring.get(ring.len() / 2).copied().unwrap_or(0) as usize];
+        let (mut total, mut peak) = (0.0, 0.0f64);
+        for y in w.y0..w.y1 {
+            for x in w.x0..w.x1 {
+                let d = self.lum[at(x, y) as usize] - bg;
+                total += d;
+                peak = peak.max(d);
+            }
+        }
+        (total, peak)
+    }
+
+    /// Adds frame `frame`: its fixed codes, the reference's (if run), each small object's
+    /// window (in the order given to [`Temporal::new`]) and, for a temporal dither, the
+    /// reference's value before the dither (DAC codes as reals).
+    pub fn add(
+        &mut self,
+        frame: u32,
+        fixed: &[u16],
+        reference: Option<&[u16]>,
+        windows: &[Window],
+        ideal: Option<&[f64]>,
+    ) {
+        for (k, w) in windows.iter().enumerate() {
+            let (t, p) = self.window(fixed, *w);
+            let o = &mut self.objects[k];
+            o.total_fixed.push(t);
+            o.peak_fixed.push(p);
+            if let Some(r) = reference {
+                let (t, p) = self.window(r, *w);
+                let o = &mut self.objects[k];
+                o.total_reference.push(t);
+                o.peak_reference.push(p);
+            }
+        }
+        if let (Some((pf, Some(pr))), Some(r)) = (&self.prev, reference) {
+            let (mut max, mut sum, mut visible) = (0.0f64, 0.0, 0u64);
+            for i in 0..fixed.len() {
+                let l = |c: u16| self.lum[c as usize];
+                let df = l(fixed[i]) - l(pf[i]);
+                let dr = l(r[i]) - l(pr[i]);
+                let e = (df - dr).abs() / (self.weber * l(r[i]).max(l(pr[i])));
+                max = max.max(e);
+                sum += e;
+                visible += u64::from(e > 1.0);
+            }
+            self.sum += sum;
+            self.count += fixed.len() as u64;
+            self.pairs.push(PairFlicker {
+                frame,
+                max_weber: max,
+                mean_weber: sum / fixed.len().max(1) as f64,
+                visible_pixels: visible,
+            });
+        }
+        if let (Some(d), Some(ideal)) = (&mut self.dither, ideal) {
+            if d.frames == 0 {
+                d.ideal = ideal.to_vec();
+                d.moved = vec![false; ideal.len()];
+                d.sum = vec![0; ideal.len()];
+                d.lo = fixed.to_vec();
+                d.hi = fixed.to_vec();
+            }
+            for i in 0..fixed.len() {
+                d.moved[i] |= ideal[i] != d.ideal[i];
+                d.sum[i] += u32::from(fixed[i]);
+                d.lo[i] = d.lo[i].min(fixed[i]);
+                d.hi[i] = d.hi[i].max(fixed[i]);
+            }
+            d.frames += 1;
+        }
+        self.prev = Some((fixed.to_vec(), reference.map(<[u16]>::to_vec)));
+    }
+
+    /// The report of the frames added.
+    pub fn finish(self) -> TemporalReport {
+        let reference = !self.pairs.is_empty();
+        let objects = self
+            .objects
+            .into_iter()
+            .map(|mut o| {
+                o.ripple_fixed_pct = ripple(&o.total_fixed);
+                o.peak_modulation_fixed_pct = modulation(&o.peak_fixed);
+                if !o.total_reference.is_empty() {
+                    o.ripple_reference_pct = Some(ripple(&o.total_reference));
+                    o.peak_modulation_reference_pct = Some(modulation(&o.peak_reference));
+                }
+                o
+            })
+            .collect();
+        let lum = &self.lum;
+        let weber = self.weber;
+        let dither = self.dither.map(|d| {
+            let (mut n, mut max, mut sum, mut flick) = (0u64, 0.0f64, 0.0, 0u64);
+            for i in 0..d.ideal.len() {
+                if d.moved[i] {
+                    continue;
+                }
+                n += 1;
+                let e = (d.sum[i] as f64 / d.frames as f64 - d.ideal[i]).abs();
+                max = max.max(e);
+                sum += e;
+                let (lo, hi) = (lum[d.lo[i] as usize], lum[d.hi[i] as usize]);
+                flick += u64::from(hi - lo > weber * lo);
+            }
+            DitherTemporal {
+                static_pixels: n,
+                max_mean_error: max,
+                mean_mean_error: if n > 0 { sum / n as f64 } else { 0.0 },
+                flickering_pixels: flick,
+                frames: d.frames,
+            }
+        });
+        TemporalReport {
+            pairs: self.pairs.len() as u64,
+            max_excess_weber: reference
+                .then(|| self.pairs.iter().map(|p| p.max_weber).fold(0.0, f64::max)),
+            mean_excess_weber: reference.then(|| self.sum / self.count.max(1) as f64),
+            visible_excess: self.pairs.iter().map(|p| p.visible_pixels).sum(),
+            per_pair: self.pairs,
+            objects,
+            dither,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model() -> DisplayModel {
+        DisplayModel {
+            b_min: 1.0,
+            b_max: 100.0,
+            gamma: 2.4,
+            weber: 0.02,
+            max_code: 255.0,
+        }
+    }
+
+    #[test]
+    fn a_fixed_output_that_follows_the_reference_has_no_excess_flicker() {
+        let mut t = Temporal::new(&model(), 4, vec![], false);
+        let a = [10u16, 200, 30, 40];
+        let b = [12u16, 180, 30, 90];
+        t.add(0, &a, Some(&a), &[], None);
+        t.add(1, &b, Some(&b), &[], None);
+        let r = t.finish();
+        assert_eq!(r.pairs, 1);
+        assert_eq!(r.max_excess_weber, Some(0.0));
+        // A pixel the fixed output steps while the reference holds is visible.
+        let mut t = Temporal::new(&model(), 4, vec![], false);
+        t.add(0, &a, Some(&a), &[], None);
+        t.add(1, &b, Some(&a), &[], None);
+        let r = t.finish();
+        assert!(r.max_excess_weber.unwrap() > 1.0);
+        assert_eq!(r.visible_excess, 3);
+    }
+
+    #[test]
+    fn an_object_that_keeps_its_light_has_no_ripple_and_one_that_jumps_has() {
+        let w = Window {
+            x0: 0,
+            y0: 0,
+            x1: 5,
+            y1: 5,
+        };
+        let mut t = Temporal::new(&model(), 5, vec![(0, "light_point".into())], false);
+        let mut f = vec![0u16; 25];
+        for k in 0..4u32 {
+            f.fill(0);
+            f[12 + (k % 2) as usize] = 200;
+            t.add(k, &f, None, &[w], None);
+        }
+        let r = t.finish();
+        assert_eq!(r.objects[0].ripple_fixed_pct, 0.0);
+        assert_eq!(r.objects[0].peak_modulation_fixed_pct, 0.0);
+        assert!(r.max_excess_weber.is_none());
+        let mut t = Temporal::new(&model(), 5, vec![(0, "light_point".into())], false);
+        for k in 0..4u32 {
+            f.fill(0);
+            f[12] = if k % 2 == 0 { 200 } else { 100 };
+            t.add(k, &f, None, &[w], None);
+        }
+        let r = t.finish();
+        assert!(r.objects[0].ripple_fixed_pct > 50.0);
+    }
+
+    #[test]
+    fn a_temporal_dither_that_averages_to_the_value_has_no_mean_error() {
+        let mut t = Temporal::new(&model(), 2, vec![], true);
+        // Value 10.5 dithered as 10, 11, 10, 11; the second pixel moves and is left out.
+        for k in 0..4u32 {
+            let c = 10 + (k % 2) as u16;
+            t.add(k, &[c, 50], None, &[], Some(&[10.5, 50.0 + k as f64]));
+        }
+        let d = t.finish().dither.expect("temporal dither");
+        assert_eq!(d.static_pixels, 1);
+        assert_eq!(d.max_mean_error, 0.0);
+        assert_eq!(d.frames, 4);
+    }
+}
