@@ -414,8 +414,9 @@ impl Write for Shared {
     }
 }
 
-/// An animated PNG (APNG) of 8-bit grey frames: encoded frame by frame as they come, then
-/// written atomically by [`Apng::finish`] (a run that stops early leaves no file).
+/// An animated PNG (APNG) of 8-bit grey frames, encoded in memory frame by frame as they
+/// come; [`Apng::finish_bytes`] gives the file, which the caller writes atomically
+/// ([`write_file`]), so a run that stops early leaves no file. `path` names it in errors.
 pub struct Apng {
     path: String,
     buf: Shared,
@@ -462,15 +463,17 @@ impl Apng {
             })
     }
 
-    /// Ends the stream and writes the file (every announced frame must have been added).
-    pub fn finish(self) -> Result<()> {
+    /// Ends the stream and gives the file's bytes (every announced frame must have been
+    /// added).
+    pub fn finish_bytes(self) -> Result<Vec<u8>> {
         let path = self.path;
         self.writer.finish().map_err(|e| Error::Image {
-            path: path.clone(),
+            path,
             msg: e.to_string(),
         })?;
-        let bytes = std::mem::take(&mut *self.buf.0.lock().unwrap_or_else(|e| e.into_inner()));
-        write_file(&path, bytes)
+        Ok(std::mem::take(
+            &mut *self.buf.0.lock().unwrap_or_else(|e| e.into_inner()),
+        ))
     }
 }
 

@@ -532,3 +532,45 @@ fn a_colour_render_opens_in_colour_with_its_delta_e_map() {
     );
     assert_eq!(v["channels"], 3, "{v}");
 }
+
+/// `igemu sequence --html`: the frames as an animated PNG (decoded by the browser as an
+/// animation of every frame run) and the four plots (cycles, error, excess flicker,
+/// small-object flicker).
+#[test]
+fn the_sequence_report_shows_an_animated_image() {
+    let Some(chrome) = chromium_or_skip("the_sequence_report_shows_an_animated_image") else {
+        return;
+    };
+    let dir = fresh_dir("browser-sequence");
+    igemu(
+        &[
+            "sequence", "flypast", "--frames", "0..4", "--html", "q.html",
+        ],
+        &dir,
+    );
+    let browser = launch(chrome, &dir);
+    let tab = open_and_check(&browser, &dir.join("q.html"), 5, &dir.join("sequence.png"));
+    let alt = eval(&tab, "document.images[0].alt");
+    assert_eq!(alt.as_str(), Some("the frames, at the sequence's rate"));
+    // The PNG carries an animation control chunk, and the browser's image decoder (WebCodecs)
+    // finds one frame per frame run.
+    let js = "(async () => { const s = document.images[0].src; \
+              const b = Uint8Array.from(atob(s.slice(s.indexOf(',') + 1)), c => c.charCodeAt(0)); \
+              const actl = new TextDecoder('latin1').decode(b.slice(0, 200)).includes('acTL'); \
+              if (typeof ImageDecoder === 'undefined') { return JSON.stringify([actl, -1]); } \
+              const d = new ImageDecoder({ data: b, type: 'image/png' }); await d.tracks.ready; \
+              return JSON.stringify([actl, d.tracks.selectedTrack.frameCount]); })()";
+    let v = tab
+        .evaluate(js, true)
+        .unwrap_or_else(|e| panic!("evaluate: {e}"))
+        .value
+        .unwrap_or(serde_json::Value::Null);
+    let (actl, frames): (bool, i64) =
+        serde_json::from_str(v.as_str().expect("a JSON string")).unwrap();
+    assert!(actl, "the sequence's image is an APNG (acTL chunk)");
+    assert!(
+        frames == 4 || frames == -1,
+        "the browser decodes {frames} frames, expected 4"
+    );
+    eprintln!("browser: the sequence's APNG: {frames} frames decoded (-1: no ImageDecoder)");
+}

@@ -19,7 +19,7 @@ use plotters::style::RGBColor;
 /// Drawing fails only on a plotters error; the caller names the report file.
 pub type Result<T> = std::result::Result<T, String>;
 
-fn svg_picture(title: &str, caption: String, svg: String, size: (u32, u32)) -> Picture {
+pub(super) fn svg_picture(title: &str, caption: String, svg: String, size: (u32, u32)) -> Picture {
     Picture {
         title: title.into(),
         caption,

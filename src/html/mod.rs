@@ -1,4 +1,5 @@
-//! The HTML reports: `igemu render --html` and `igemu sweep --html` (and `sweep merge`).
+//! The HTML reports: `igemu render --html`, `igemu sweep --html` (and `sweep merge`) and
+//! `igemu sequence --html`.
 //!
 //! One self-contained file each, built from `minijinja` templates (`render.html`,
 //! `sweep.html`, both extending `base.html`): every picture is an inline PNG and every
@@ -20,6 +21,7 @@ pub mod figures;
 pub mod images;
 pub mod plots;
 pub mod render;
+pub mod sequence;
 pub mod sweep;
 pub mod timeline;
 
@@ -38,6 +40,7 @@ fn environment() -> Environment<'static> {
         ("base.html", include_str!("base.html")),
         ("picture.html", include_str!("picture.html")),
         ("render.html", include_str!("render.html")),
+        ("sequence.html", include_str!("sequence.html")),
         ("sweep.html", include_str!("sweep.html")),
     ] {
         env.add_template(name, text)
@@ -58,6 +61,20 @@ pub fn render_page(scene: &Scene, hw: &HwConfig, r: &Render, path: &str) -> Resu
     let page = render::page(scene, hw, r).map_err(|m| page_error(path, m))?;
     environment()
         .get_template("render.html")
+        .and_then(|t| t.render(context! { page => minijinja::value::Serde(&page) }))
+        .map_err(|e| page_error(path, e))
+}
+
+/// The HTML report of sequence `r`, with its frames as an animated PNG (`apng`: the bytes,
+/// width and height) when given; `path` names the file in errors.
+pub fn sequence_page(
+    r: &crate::sequence::SequenceReport,
+    apng: Option<(&[u8], u32, u32)>,
+    path: &str,
+) -> Result<String> {
+    let page = sequence::page(r, apng).map_err(|m| page_error(path, m))?;
+    environment()
+        .get_template("sequence.html")
         .and_then(|t| t.render(context! { page => minijinja::value::Serde(&page) }))
         .map_err(|e| page_error(path, e))
 }

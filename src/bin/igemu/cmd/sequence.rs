@@ -7,7 +7,7 @@ use crate::guard::{Inputs, distinct_outputs};
 use crate::out::outln;
 use clap::Args;
 use igemu::error::Error;
-use igemu::output::{Apng, dac_to_u8, diff_values, write_dac};
+use igemu::output::{Apng, dac_to_u8, diff_values, write_dac, write_file};
 use igemu::sequence::{self, FrameImages, SequenceOptions, SequenceReport};
 use std::process::ExitCode;
 
@@ -28,6 +28,10 @@ pub struct SequenceArgs {
     /// the difference to the reference: 128 = identical, 32 grey levels per code).
     #[arg(long, value_name = "FILE.png")]
     pub apng: Option<String>,
+    /// Write an HTML report: the frames animated, cycles per frame against the period, error
+    /// and flicker per frame, the small objects' luminance over time.
+    #[arg(long, value_name = "FILE.html")]
+    pub html: Option<String>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -100,6 +104,10 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
         inputs.check("--apng", p)?;
         outs.push(("--apng", p.clone()));
     }
+    if let Some(p) = &a.html {
+        inputs.check("--html", p)?;
+        outs.push(("--html", p.clone()));
+    }
     if let Some(p) = &a.out {
         for f in frames.clone() {
             let path = numbered(p, f);
@@ -120,9 +128,9 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
         .as_ref()
         .map_or(scene.display.refresh_hz, |q| q.rate_hz);
     let bits = hw.gamma.dac_bits;
-    let mut apng = match &a.apng {
+    let width = if reference { 2 * w } else { w };
+    let mut apng = match a.apng.as_ref().or(a.html.as_ref()) {
         Some(p) if scene.sequence.is_some() && !scene.image.colour => {
-            let width = if reference { 2 * w } else { w };
             Some(Apng::new(p, width, h, frames.len() as u32, rate)?)
         }
         _ => None,
@@ -155,8 +163,13 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
         Ok(())
     };
     let r = sequence::run(&scene, &hw, &opts, &mut on_frame)?;
-    if let Some(ap) = apng {
-        ap.finish()?;
+    let bytes = apng.map(Apng::finish_bytes).transpose()?;
+    if let (Some(p), Some(b)) = (&a.apng, &bytes) {
+        write_file(p, b)?;
+    }
+    if let Some(p) = &a.html {
+        let page = igemu::html::sequence_page(&r, bytes.as_deref().map(|b| (b, width, h)), p)?;
+        write_file(p, page)?;
     }
     if a.json {
         outln!(
