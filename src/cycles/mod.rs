@@ -28,14 +28,16 @@
 //! charged per primitive (`ceil(items/lanes)`), not per span, so the per-span rounding of a
 //! real span walker is not modelled.
 
+pub mod schedule;
 pub mod sim;
 pub mod stepwise;
 pub mod vcd;
 pub mod workload;
 
+pub use schedule::{ScheduleTime, Schedules};
 pub use sim::{SimResult, StageCycles, State, Trace, simulate};
 pub use stepwise::simulate_stepwise;
-pub use workload::{ChainStage, ScreenFacts, Workload};
+pub use workload::{ChainStage, Lines, ScreenFacts, Workload};
 
 use crate::cost::CostSummary;
 use crate::stage::StageId;
@@ -134,14 +136,19 @@ pub struct CycleReport {
     pub sim: SimSpeed,
     /// Cost summary.
     pub cost: CostSummary,
+    /// Both depth-of-field schedules' frame times (absent without a stage that streams,
+    /// e.g. a pinhole scene).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub schedules: Option<Schedules>,
 }
 
 impl CycleReport {
-    /// The two summary lines of the text report and the HTML page: the frame (cycles,
-    /// bottleneck, bounds, frame-port-bound cycles) and the frame rate against the display.
-    pub fn summary_lines(&self) -> [String; 2] {
+    /// The summary lines of the text report and the HTML page: the frame (cycles,
+    /// bottleneck, bounds, frame-port-bound cycles), the frame rate against the display and,
+    /// with a streamed stage, both depth-of-field schedules.
+    pub fn summary_lines(&self) -> Vec<String> {
         let t = &self.throughput;
-        [
+        let mut v = vec![
             format!(
                 "frame: {} cycles | bottleneck {} | bounds {} <= {} <= {} {} | frame-port-bound cycles {}",
                 self.total_cycles,
@@ -166,12 +173,16 @@ impl CycleReport {
                     "NOT real time"
                 }
             ),
-        ]
+        ];
+        v.extend(self.schedules.as_ref().map(Schedules::line));
+        v
     }
 }
 
 /// The report section of a simulation `r` of `w` (`wall`: its wall time, seconds) at
-/// `clock_mhz` against a display of `refresh_hz`.
+/// `clock_mhz` against a display of `refresh_hz`; `other`: the other depth-of-field
+/// schedule's workload and simulation, for the comparison.
+#[allow(clippy::too_many_arguments)]
 pub fn report(
     w: &Workload,
     planned: &[StageId],
@@ -180,6 +191,7 @@ pub fn report(
     cost: CostSummary,
     r: &SimResult,
     wall: f64,
+    other: (&Workload, &SimResult),
 ) -> CycleReport {
     let (lo, hi) = r.bounds();
     CycleReport {
@@ -209,5 +221,6 @@ pub fn report(
             },
         },
         cost,
+        schedules: Schedules::new((w, r), other, clock_mhz),
     }
 }
