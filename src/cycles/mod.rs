@@ -11,8 +11,14 @@
 //!   starts when the geometry chain has drained (the filter reads resolved samples), and
 //!   gamma writes the display buffer. Tiles the plan did not bin hold the background code
 //!   and cost no cycles (a per-tile "background" flag, like a fast clear);
-//! * with a thin lens, accumulate writes the frame memory (a sink), `dof` runs on the
-//!   finished frame (one token per depth layer) and `gamma` then reads it row by row.
+//! * with a thin lens and `dof.schedule = "frame"`, accumulate writes the frame memory (a
+//!   sink), `dof` runs on the finished frame (one token per depth layer) and `gamma` then
+//!   reads it row by row;
+//! * with `dof.schedule = "stream"` (the default), `dof` takes one token per screen row and
+//!   reads accumulate's rows through line buffers ([`Lines`]): row `y` starts when rows up
+//!   to `y + radius` are complete, accumulate stalls while the buffers are full, and gamma
+//!   follows `dof` through its FIFO. The report carries both schedules' frame times
+//!   ([`Schedules`]); the cost charges the line buffers.
 //!
 //! A stage serves one token at a time for `max(1, ceil(items / lanes)) * ii` cycles ([`sim`],
 //! which jumps over the cycles in which nothing changes; [`stepwise`] is its one-clock-at-a-
@@ -24,7 +30,8 @@
 //! Items per token, from the real run: input = vertices (3, 2 or 1), setup = 1 primitive,
 //! raster = sample positions the walker steps (emitted + walked outside the region),
 //! visibility = depth tests, accumulate = MACs (window samples x pixels), dof = output
-//! samples of both 1-D passes, gamma = pixels. Approximation: the raster's items are
+//! samples of both 1-D passes (streamed: each layer's spread evenly over the rows of its
+//! box), gamma = pixels. Approximation: the raster's items are
 //! charged per primitive (`ceil(items/lanes)`), not per span, so the per-span rounding of a
 //! real span walker is not modelled.
 

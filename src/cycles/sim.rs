@@ -10,14 +10,21 @@
 //! `t + 1`. A single token through a chain therefore takes exactly `sum(service + latency)`
 //! cycles. A chain head (no feeder) starts when every stage before it has finished.
 //!
+//! A streamed reader ([`Lines`], `dof.schedule = "stream"`) is a chain head that starts a
+//! row when the stages before its writer have finished and the writer's tokens holding the
+//! rows it reads have left the writer's pipeline (seen in the same cycle, as a FIFO entry
+//! is). The writer starts a token only when its rows fit the line buffers, as the reader's
+//! served rows stood at the end of the cycle before (as a freed FIFO slot); until then it
+//! is stalled while its pipeline drains.
+//!
 //! # Jumping over quiet cycles
 //! [`simulate`] steps one clock exactly as the stepwise reference
 //! ([`super::stepwise::simulate_stepwise`]) does, then jumps over the following cycles in
 //! which no stage can change state or touch a FIFO. After a clock, each stage stays as it is
 //! for a number of cycles it knows from its own counters alone, as long as no other stage
 //! acts: a busy stage until its token's last service cycle (`remaining - 1` cycles), a
-//! starved or idle one until its pipeline's head reaches the output, a stalled one for ever
-//! (until the next stage takes a token). The other stages can only end that by an action of
+//! starved or idle one (or one stalled by full line buffers) until its pipeline's head
+//! reaches the output, a stalled one for ever (until the next stage takes a token). The other stages can only end that by an action of
 //! their own (entering a FIFO, taking from one, finishing), which their own count bounds, so
 //! the smallest count over the stages is a run of cycles in which every state and FIFO
 //! occupancy repeats: the counts grow in bulk, service counters and pipeline countdowns
