@@ -274,9 +274,9 @@ fn html_reports_open_in_a_browser_without_errors() {
     let browser = launch(chrome, &dir);
 
     // The render: 4 pictures (fixed, reference, difference, banding), the truth and the
-    // difference to it, the layer map of the thin-lens default scene, and 4 plots (LUT,
-    // histogram, timeline, sigma).
-    let tab = open_and_check(&browser, &dir.join("r.html"), 11, &dir.join("render.png"));
+    // difference to it, the layer map of the thin-lens default scene, and 5 plots (LUT,
+    // histogram, the timelines of both depth-of-field schedules, sigma).
+    let tab = open_and_check(&browser, &dir.join("r.html"), 12, &dir.join("render.png"));
     let links = eval(
         &tab,
         "JSON.stringify(Array.from(document.querySelectorAll('a[href^=\"#signals-\"]')).map(a => !!document.getElementById(a.getAttribute('href').slice(1))))",
