@@ -474,11 +474,12 @@ fn a_colour_render_opens_in_colour_with_its_delta_e_map() {
     );
     let browser = launch(chrome, &dir);
     // 7 pictures (fixed and reference in RGB, a difference per channel, the banding map, the
-    // layer map), the CIEDE2000 heat map and 4 plots.
+    // layer map), the CIEDE2000 heat map and 5 plots (the timelines of both depth-of-field
+    // schedules among them).
     let tab = open_and_check(
         &browser,
         &dir.join("c.html"),
-        12,
+        13,
         &dir.join("render-colour.png"),
     );
     let js = r#"(() => {
