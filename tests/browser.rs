@@ -274,9 +274,9 @@ fn html_reports_open_in_a_browser_without_errors() {
     let browser = launch(chrome, &dir);
 
     // The render: 4 pictures (fixed, reference, difference, banding), the truth and the
-    // difference to it, the layer map of the thin-lens default scene, and 4 plots (LUT,
-    // histogram, timeline, sigma).
-    let tab = open_and_check(&browser, &dir.join("r.html"), 11, &dir.join("render.png"));
+    // difference to it, the layer map of the thin-lens default scene, and 5 plots (LUT,
+    // histogram, the timelines of both depth-of-field schedules, sigma).
+    let tab = open_and_check(&browser, &dir.join("r.html"), 12, &dir.join("render.png"));
     let links = eval(
         &tab,
         "JSON.stringify(Array.from(document.querySelectorAll('a[href^=\"#signals-\"]')).map(a => !!document.getElementById(a.getAttribute('href').slice(1))))",
@@ -474,11 +474,12 @@ fn a_colour_render_opens_in_colour_with_its_delta_e_map() {
     );
     let browser = launch(chrome, &dir);
     // 7 pictures (fixed and reference in RGB, a difference per channel, the banding map, the
-    // layer map), the CIEDE2000 heat map and 4 plots.
+    // layer map), the CIEDE2000 heat map and 5 plots (the timelines of both depth-of-field
+    // schedules among them).
     let tab = open_and_check(
         &browser,
         &dir.join("c.html"),
-        12,
+        13,
         &dir.join("render-colour.png"),
     );
     let js = r#"(() => {

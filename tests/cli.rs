@@ -399,7 +399,23 @@ fn cost_takes_json() {
     let stages = v["stages"].as_array().expect("stages");
     let (code, text, err) = igemu(&["cost"]);
     assert_eq!(code, 0, "{err}");
-    let rows: Vec<&str> = text.lines().skip(2).collect();
+    let mut rows: Vec<&str> = text.lines().skip(2).collect();
+    // The default scene streams its depth of field: the last line is the line buffers.
+    let lb = &v["line_buffers"];
+    assert_eq!(lb["schedule"], "stream");
+    assert_eq!(lb["charged"], true);
+    assert!(lb["bits"].as_u64().unwrap() > 0);
+    assert_eq!(
+        rows.pop(),
+        Some(
+            format!(
+                "dof stream line buffers: {} bits ({} rows; dof.schedule = \"stream\")",
+                lb["bits"], lb["rows"]
+            )
+            .as_str()
+        ),
+        "{text}"
+    );
     assert_eq!(stages.len(), rows.len(), "{text}");
     for (s, row) in stages.iter().zip(&rows) {
         let f: Vec<&str> = row.split_whitespace().collect();

@@ -423,6 +423,44 @@ fn the_html_report_of_a_colour_render_shows_colour_and_a_grey_one_does_not() {
     assert!(page.colour.is_none());
     let fixed = decode_picture(&page.pictures[0].uri);
     assert_eq!(fixed.color(), image::ColorType::L8);
+    // The cycle timelines of both depth-of-field schedules, the chosen one first.
+    let timelines: Vec<&str> = page
+        .plots
+        .iter()
+        .map(|p| p.title.as_str())
+        .filter(|t| t.starts_with("cycle simulation"))
+        .collect();
+    assert_eq!(timelines.len(), 2, "{timelines:?}");
+    assert!(
+        timelines[0].contains("dof.schedule = \"stream\""),
+        "{timelines:?}"
+    );
+    assert!(
+        timelines[1].contains("dof.schedule = \"frame\""),
+        "{timelines:?}"
+    );
+    for s in ["stream", "frame"] {
+        let t = format!("dof.schedule = &quot;{s}&quot;");
+        assert!(html.contains(&t), "the page lacks {t:?}");
+    }
+    // Every timed stage has a row, logdomain and dither included: a log-coded frame with
+    // error diffusion (a log-potentiate frame; a log-add one takes no dither).
+    let mut hl = HwConfig::preset("log8-potentiate").unwrap();
+    hl.dither.kind = igemu::config::DitherKind::FloydSteinberg;
+    let l = render(&grey, &hl);
+    let page = igemu::html::render::page(&grey, &hl, &l).unwrap();
+    let rows: Vec<&str> = page
+        .plots
+        .iter()
+        .filter(|p| p.title.starts_with("cycle simulation"))
+        .map(|p| p.caption.as_str())
+        .collect();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    for caption in rows {
+        for stage in ["logdomain", "accumulate", "dof", "gamma", "dither"] {
+            assert!(caption.contains(stage), "{stage}: {caption}");
+        }
+    }
 }
 
 /// A folder for the binary's files and the saturated ramp (R:G:B = 5:2:1) as a scene file in

@@ -7,11 +7,12 @@
 
 mod common;
 
+use common::sim::{self, assert_same_as_stepwise};
 use common::{Rng, hw, point, scene, tri};
 use igemu::config::HwConfig;
-use igemu::config::{CyclesCfg, StageTiming};
+use igemu::config::{CyclesCfg, DofSchedule, StageTiming};
 use igemu::cycles::vcd::VcdWriter;
-use igemu::cycles::{self, ScreenFacts, SimResult, State, Workload};
+use igemu::cycles::{self, ScreenFacts, State, Workload};
 use igemu::files::TomlFile;
 use igemu::pipeline::{self, Render, render};
 use igemu::scene::{Lens, Scene};
@@ -173,7 +174,7 @@ fn analytic_bounds_hold_on_random_scenes() {
         let r = run(&s, &HwConfig::default_config());
         for _ in 0..25 {
             let c = random_timing(&mut rng);
-            let w = r.workload_for(&c);
+            let w = r.workload_for(&c, DofSchedule::Stream);
             let services: Vec<Vec<u64>> = (0..w.stages.len()).map(|i| w.services(i).0).collect();
             let sim = cycles::simulate(&w, None);
             let (lo, hi) = sim.bounds();
@@ -460,10 +461,12 @@ fn pinhole_camera_plans_no_dof_stage() {
     assert!(r.report.cycles.plan.unmodelled.is_empty());
 }
 
+/// `dof.schedule = "frame"`: the model before the streamed schedule, its numbers unchanged.
 #[test]
 fn thin_lens_scene_runs_dof_on_the_finished_frame_then_gamma() {
     let s = Scene::default_scene();
     let mut h = HwConfig::default_config();
+    h.dof.schedule = DofSchedule::Frame;
     let r = run(&s, &h);
     let c = &r.report.cycles;
     assert!(c.plan.unmodelled.is_empty(), "{:?}", c.plan.unmodelled);
@@ -493,6 +496,14 @@ fn thin_lens_scene_runs_dof_on_the_finished_frame_then_gamma() {
     assert!(gamma.starved >= dof.busy + acc.busy, "{gamma:?}");
     assert_eq!(c.total_cycles, dof.busy + dof.starved + dof.idle);
     assert_eq!(c.bottleneck, "dof");
+    // The frame time of the default scene before the streamed schedule existed
+    // (`igemu cycles default` on main at 70cd7e3), and the comparison names it.
+    assert_eq!(c.total_cycles, 1_603_811);
+    let both = c.schedules.as_ref().expect("both schedules");
+    assert_eq!(both.chosen, DofSchedule::Frame);
+    assert_eq!(both.frame.cycles, c.total_cycles);
+    assert_eq!(both.frame.line_buffer_bits, 0);
+    assert_eq!(c.cost.line_buffer_bits, 0);
     // Twice the lanes, half the busy cycles (each layer rounds up on its own).
     h.cycles.dof.lanes = 4;
     let r4 = run(&s, &h);
@@ -597,31 +608,6 @@ fn bad_cycle_fields_name_the_field_and_range() {
     assert_eq!(ok.cycles.clock_mhz, 50.0);
 }
 
-/// A simulation and its VCD text, by the event-driven simulator (`stepwise = false`) or the
-/// one-clock-at-a-time reference.
-fn sim_and_vcd(w: &Workload, stepwise: bool) -> (SimResult, String) {
-    let mut vcd = VcdWriter::new(Vec::new(), w, 100.0).unwrap();
-    let mut trace = |t, st: &[State], occ: &[u32]| vcd.cycle(t, st, occ);
-    let r = if stepwise {
-        cycles::simulate_stepwise(w, Some(&mut trace))
-    } else {
-        cycles::simulate(w, Some(&mut trace))
-    };
-    let text = String::from_utf8(vcd.finish(r.total_cycles).unwrap()).unwrap();
-    (r, text)
-}
-
-/// The event-driven simulator gives the reference's result and VCD text on `w`, with and
-/// without a trace.
-fn assert_same_as_stepwise(w: &Workload, what: &str) -> SimResult {
-    let (fast, fast_vcd) = sim_and_vcd(w, false);
-    let (slow, slow_vcd) = sim_and_vcd(w, true);
-    assert_eq!(fast, slow, "{what}");
-    assert_eq!(cycles::simulate(w, None), slow, "{what}: without a trace");
-    assert!(fast_vcd == slow_vcd, "{what}: the VCD texts differ");
-    slow
-}
-
 fn all_timings(c: &mut CyclesCfg, mut f: impl FnMut(&mut StageTiming)) {
     for id in igemu::config::TIMED {
         f(c.timing_mut(id).unwrap());
@@ -667,7 +653,9 @@ fn event_simulator_matches_stepwise_on_the_embedded_scenes() {
         }
         let mut port_bound = false;
         for (what, c) in &configs {
-            let w = r.workload_for(c);
+            let w = r.workload_for(c, DofSchedule::Frame);
+            assert_same_as_stepwise(&w, &format!("{name}, {what}, frame schedule"));
+            let w = r.workload_for(c, DofSchedule::Stream);
             let sim = assert_same_as_stepwise(&w, &format!("{name}, {what}"));
             port_bound |= sim.frame_port_bound_cycles > 0;
             if *what == "preset" {
@@ -722,6 +710,8 @@ fn random_workload(rng: &mut Rng) -> Workload {
                 item: "items",
                 items,
                 port_bits,
+                rows: vec![],
+                stream: None,
             },
         ));
     }
@@ -736,7 +726,7 @@ fn random_workload(rng: &mut Rng) -> Workload {
     });
     let planned: Vec<(StageId, Option<&Tokens>)> =
         planned.iter().map(|(id, t)| (*id, Some(t))).collect();
-    Workload::new(&planned, &c, ScreenFacts::default())
+    Workload::new(&planned, &c, ScreenFacts::default(), DofSchedule::Stream)
 }
 
 proptest! {
@@ -748,6 +738,9 @@ proptest! {
         let mut rng = Rng::new(seed);
         let w = random_workload(&mut rng);
         assert_same_as_stepwise(&w, &format!("{w:?}"));
+        // And a streamed depth of field behind accumulate's tiles.
+        let w = sim::random_streamed(&mut rng);
+        sim::assert_same_as_stepwise(&w, &format!("{w:?}"));
     }
 }
 
@@ -760,6 +753,8 @@ fn a_workload_that_cannot_finish_ends() {
         item: "items",
         items: vec![5; n],
         port_bits: Vec::new(),
+        rows: vec![],
+        stream: None,
     };
     let (a, b) = (tokens(1), tokens(3));
     let c = CyclesCfg::default_for(12);
@@ -767,6 +762,7 @@ fn a_workload_that_cannot_finish_ends() {
         &[(StageId::Setup, Some(&a)), (StageId::Raster, Some(&b))],
         &c,
         ScreenFacts::default(),
+        DofSchedule::Stream,
     );
     let r = cycles::simulate(&w, None);
     assert_eq!(r.stages[1].busy, c.raster.service(5));

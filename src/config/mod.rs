@@ -36,7 +36,7 @@ pub use dither::{
     BLUE_NOISE_SIZES, DitherCfg, DitherKind, ERROR_INT_BITS, MAX_ERROR_FRAC_BITS, Placement,
 };
 pub use dof::{
-    AlphaNorm, DOF_BITS, DofCfg, DofKernel, DofKind, DownsampleCfg, LuminanceCfg,
+    AlphaNorm, DOF_BITS, DofCfg, DofKernel, DofKind, DofSchedule, DownsampleCfg, LuminanceCfg,
     MAX_HALF_SIZE_LIMIT, SIGMA_ROM_BITS, SigmaForm,
 };
 pub use dof::{DOWN_BITS, DOWN_FACTORS, DOWN_TAPS, LeakGuard, Reconstruction};

@@ -3,8 +3,8 @@
 
 use super::{
     AccumulateCfg, AlphaNorm, CodingCfg, CyclesCfg, DitherCfg, DofCfg, DofKernel, DofKind,
-    DownsampleCfg, FilterKind, GammaCfg, HwConfig, InputCfg, LuminanceCfg, MitchellBc, RasterCfg,
-    SigmaForm, VisibilityCfg,
+    DofSchedule, DownsampleCfg, FilterKind, GammaCfg, HwConfig, InputCfg, LuminanceCfg, MitchellBc,
+    RasterCfg, SigmaForm, VisibilityCfg,
 };
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer};
 
@@ -65,6 +65,7 @@ pub fn preset(name: &str) -> Option<HwConfig> {
         dof: DofCfg {
             kind: DofKind::Layered,
             kernel: DofKernel::Gaussian,
+            schedule: DofSchedule::Stream,
             sigma: SigmaForm::Paper,
             sigma_rom_bits: 10,
             p: 0.1,

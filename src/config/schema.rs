@@ -7,8 +7,8 @@ use super::coding::{ACC_FRAC_BITS, MAX_LOG_BITS, MIN_LOG_BITS, TABLE_ADDR_BITS, 
 use super::cycles::{CLOCK_MHZ, FRAME_PORT_BITS, TILE, TIMED, TIMING_RANGES};
 use super::dither::{BLUE_NOISE_SIZES, ERROR_INT_BITS, FRAC_BITS, MAX_ERROR_FRAC_BITS};
 use super::dof::{
-    AlphaNorm, DOF_BITS, DofKernel, DofKind, DownsampleCfg, LuminanceCfg, MAX_HALF_SIZE_LIMIT,
-    SIGMA_ROM_BITS,
+    AlphaNorm, DOF_BITS, DofKernel, DofKind, DofSchedule, DownsampleCfg, LuminanceCfg,
+    MAX_HALF_SIZE_LIMIT, SIGMA_ROM_BITS,
 };
 use super::gamma::{DAC_BITS, MAX_GAMMA};
 use super::raster::{INTERP_GUARD_BITS, MAX_GUARD_BAND};
@@ -129,10 +129,14 @@ pub(crate) fn hint(path: &str) -> Option<String> {
         ("dither", "seed") => s("an integer in 0..=18446744073709551615"),
         ("dither", "frame") => s("an integer in 0..=4294967295 (the frame number)"),
         ("dof", "") => table(
-            "kind, kernel, sigma, sigma_rom_bits, p, k, coef_bits, alpha_bits, alpha_norm, guard_bits, line_bits, acc_bits, max_half_size, quant, overflow, skip_uniform_tiles, and the tables [dof.luminance], [dof.downsample]",
+            "kind, kernel, schedule, sigma, sigma_rom_bits, p, k, coef_bits, alpha_bits, alpha_norm, guard_bits, line_bits, acc_bits, max_half_size, quant, overflow, skip_uniform_tiles, and the tables [dof.luminance], [dof.downsample]",
         ),
         ("dof", "kind") => format!("one of {}", names(DofKind::ALL.iter().map(|k| k.name()))),
         ("dof", "kernel") => format!("one of {}", names(DofKernel::ALL.iter().map(|k| k.name()))),
+        ("dof", "schedule") => format!(
+            "one of {}",
+            names(DofSchedule::ALL.iter().map(|k| k.name()))
+        ),
         ("dof", "sigma") => s("one of \"paper\", \"affine\""),
         ("dof", "alpha_norm") => {
             format!("one of {}", names(AlphaNorm::ALL.iter().map(|k| k.name())))

@@ -31,6 +31,26 @@ pub struct CostSummary {
     pub multiplier_bit_products: u64,
     /// Memories packed with `bitvec` and read back.
     pub packed: Vec<PackCheck>,
+    /// Line buffers of the streamed depth-of-field schedule (in `storage_bits` as
+    /// [`LINE_BUFFERS`] and in the total; 0 on the finished frame).
+    pub line_buffer_bits: u64,
+}
+
+/// The `storage_bits` key of the streamed schedule's line buffers between accumulate and
+/// depth of field (docs/cycles.md, "Streamed depth of field").
+pub const LINE_BUFFERS: &str = "dof stream line buffers";
+
+impl CostSummary {
+    /// Charges the streamed schedule's line buffers (`bits`: rows held x frame width x bits
+    /// per pixel the depth of field reads; 0 adds nothing).
+    pub fn with_line_buffers(mut self, bits: u64) -> Self {
+        if bits > 0 {
+            *self.storage_bits.entry(LINE_BUFFERS.into()).or_default() += bits;
+            self.total_storage_bits += bits;
+            self.line_buffer_bits += bits;
+        }
+        self
+    }
 }
 
 /// Sums the stage costs.

@@ -11,8 +11,14 @@
 //!   starts when the geometry chain has drained (the filter reads resolved samples), and
 //!   gamma writes the display buffer. Tiles the plan did not bin hold the background code
 //!   and cost no cycles (a per-tile "background" flag, like a fast clear);
-//! * with a thin lens, accumulate writes the frame memory (a sink), `dof` runs on the
-//!   finished frame (one token per depth layer) and `gamma` then reads it row by row.
+//! * with a thin lens and `dof.schedule = "frame"`, accumulate writes the frame memory (a
+//!   sink), `dof` runs on the finished frame (one token per depth layer) and `gamma` then
+//!   reads it row by row;
+//! * with `dof.schedule = "stream"` (the default), `dof` takes one token per screen row and
+//!   reads accumulate's rows through line buffers ([`Lines`]): row `y` starts when rows up
+//!   to `y + radius` are complete, accumulate stalls while the buffers are full, and gamma
+//!   follows `dof` through its FIFO. The report carries both schedules' frame times
+//!   ([`Schedules`]); the cost charges the line buffers.
 //!
 //! A stage serves one token at a time for `max(1, ceil(items / lanes)) * ii` cycles ([`sim`],
 //! which jumps over the cycles in which nothing changes; [`stepwise`] is its one-clock-at-a-
@@ -24,18 +30,21 @@
 //! Items per token, from the real run: input = vertices (3, 2 or 1), setup = 1 primitive,
 //! raster = sample positions the walker steps (emitted + walked outside the region),
 //! visibility = depth tests, accumulate = MACs (window samples x pixels), dof = output
-//! samples of both 1-D passes, gamma = pixels. Approximation: the raster's items are
+//! samples of both 1-D passes (streamed: each layer's spread evenly over the rows of its
+//! box), gamma = pixels. Approximation: the raster's items are
 //! charged per primitive (`ceil(items/lanes)`), not per span, so the per-span rounding of a
 //! real span walker is not modelled.
 
+pub mod schedule;
 pub mod sim;
 pub mod stepwise;
 pub mod vcd;
 pub mod workload;
 
+pub use schedule::{ScheduleTime, Schedules};
 pub use sim::{SimResult, StageCycles, State, Trace, simulate};
 pub use stepwise::simulate_stepwise;
-pub use workload::{ChainStage, ScreenFacts, Workload};
+pub use workload::{ChainStage, Lines, ScreenFacts, Workload};
 
 use crate::cost::CostSummary;
 use crate::stage::StageId;
@@ -134,14 +143,19 @@ pub struct CycleReport {
     pub sim: SimSpeed,
     /// Cost summary.
     pub cost: CostSummary,
+    /// Both depth-of-field schedules' frame times (absent without a stage that streams,
+    /// e.g. a pinhole scene).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub schedules: Option<Schedules>,
 }
 
 impl CycleReport {
-    /// The two summary lines of the text report and the HTML page: the frame (cycles,
-    /// bottleneck, bounds, frame-port-bound cycles) and the frame rate against the display.
-    pub fn summary_lines(&self) -> [String; 2] {
+    /// The summary lines of the text report and the HTML page: the frame (cycles,
+    /// bottleneck, bounds, frame-port-bound cycles), the frame rate against the display and,
+    /// with a streamed stage, both depth-of-field schedules.
+    pub fn summary_lines(&self) -> Vec<String> {
         let t = &self.throughput;
-        [
+        let mut v = vec![
             format!(
                 "frame: {} cycles | bottleneck {} | bounds {} <= {} <= {} {} | frame-port-bound cycles {}",
                 self.total_cycles,
@@ -166,12 +180,16 @@ impl CycleReport {
                     "NOT real time"
                 }
             ),
-        ]
+        ];
+        v.extend(self.schedules.as_ref().map(Schedules::line));
+        v
     }
 }
 
 /// The report section of a simulation `r` of `w` (`wall`: its wall time, seconds) at
-/// `clock_mhz` against a display of `refresh_hz`.
+/// `clock_mhz` against a display of `refresh_hz`; `other`: the other depth-of-field
+/// schedule's workload and simulation, for the comparison.
+#[allow(clippy::too_many_arguments)]
 pub fn report(
     w: &Workload,
     planned: &[StageId],
@@ -180,6 +198,7 @@ pub fn report(
     cost: CostSummary,
     r: &SimResult,
     wall: f64,
+    other: (&Workload, &SimResult),
 ) -> CycleReport {
     let (lo, hi) = r.bounds();
     CycleReport {
@@ -209,5 +228,6 @@ pub fn report(
             },
         },
         cost,
+        schedules: Schedules::new((w, r), other, clock_mhz),
     }
 }

@@ -10,21 +10,28 @@
 //! `t + 1`. A single token through a chain therefore takes exactly `sum(service + latency)`
 //! cycles. A chain head (no feeder) starts when every stage before it has finished.
 //!
+//! A streamed reader ([`Lines`], `dof.schedule = "stream"`) is a chain head that starts a
+//! row when the stages before its writer have finished and the writer's tokens holding the
+//! rows it reads have left the writer's pipeline (seen in the same cycle, as a FIFO entry
+//! is). The writer starts a token only when its rows fit the line buffers, as the reader's
+//! served rows stood at the end of the cycle before (as a freed FIFO slot); until then it
+//! is stalled while its pipeline drains.
+//!
 //! # Jumping over quiet cycles
 //! [`simulate`] steps one clock exactly as the stepwise reference
 //! ([`super::stepwise::simulate_stepwise`]) does, then jumps over the following cycles in
 //! which no stage can change state or touch a FIFO. After a clock, each stage stays as it is
 //! for a number of cycles it knows from its own counters alone, as long as no other stage
 //! acts: a busy stage until its token's last service cycle (`remaining - 1` cycles), a
-//! starved or idle one until its pipeline's head reaches the output, a stalled one for ever
-//! (until the next stage takes a token). The other stages can only end that by an action of
+//! starved or idle one (or one stalled by full line buffers) until its pipeline's head
+//! reaches the output, a stalled one for ever (until the next stage takes a token). The other stages can only end that by an action of
 //! their own (entering a FIFO, taking from one, finishing), which their own count bounds, so
 //! the smallest count over the stages is a run of cycles in which every state and FIFO
 //! occupancy repeats: the counts grow in bulk, service counters and pipeline countdowns
 //! shrink in bulk, and the next clock is stepped again. The trace receives only the stepped
 //! clocks; the skipped ones repeat the last values, so a value-change dump is the same text.
 
-use super::workload::Workload;
+use super::workload::{Lines, Workload};
 use serde::Serialize;
 use std::collections::VecDeque;
 
@@ -119,6 +126,15 @@ struct Sim {
     occ: u32,
     depth: Option<u32>,
     feeder: Option<usize>,
+    /// Tokens that have left the pipeline.
+    out: usize,
+    /// The line buffers it reads (a streamed reader).
+    lines: Option<Lines>,
+    /// The streamed reader of the rows it writes (a line-buffer writer).
+    reader: Option<usize>,
+    /// Whether it could not start a token in the last clock because the line buffers were
+    /// full (stalled, its pipeline still drains).
+    blocked: bool,
 }
 
 impl Sim {
@@ -126,10 +142,18 @@ impl Sim {
         self.next == self.service.len() && self.remaining == 0 && self.pipe.is_empty()
     }
 
+    /// Tokens whose service is complete.
+    pub(super) fn served(next: usize, remaining: u64) -> usize {
+        next - usize::from(remaining > 0)
+    }
+
     /// After a clock in which the stage was in `state`: the cycles that follow in which it
     /// stays in `state` and touches no FIFO, as long as no other stage acts.
     fn quiet(&self, state: State) -> u64 {
         match state {
+            // Waiting for line-buffer space: only the reader's action ends it; the pipeline
+            // drains meanwhile.
+            State::Stalled if self.blocked => self.pipe.front().map_or(u64::MAX, |&c| c as u64),
             // Frozen until the next stage takes a token (its own action).
             State::Stalled => match self.depth {
                 Some(d) if self.occ >= d => u64::MAX,
@@ -152,7 +176,7 @@ impl Sim {
 
     /// Advances `n` quiet cycles (`n <= self.quiet(state)`).
     fn skip(&mut self, state: State, n: u64) {
-        if state == State::Stalled {
+        if state == State::Stalled && !self.blocked {
             return;
         }
         if state == State::Busy {
@@ -176,6 +200,7 @@ fn clock(sims: &mut [Sim], states: &mut [State]) {
     for i in 0..sims.len() {
         // Leave the pipeline into the FIFO (or the sink).
         let s = &mut sims[i];
+        s.blocked = false;
         if s.pipe.front() == Some(&0) {
             match s.depth {
                 Some(d) if s.occ >= d => {
@@ -190,6 +215,7 @@ fn clock(sims: &mut [Sim], states: &mut [State]) {
                     s.pipe.pop_front();
                 }
             }
+            s.out += 1;
         }
         for r in s.pipe.iter_mut() {
             *r = r.saturating_sub(1);
@@ -198,12 +224,26 @@ fn clock(sims: &mut [Sim], states: &mut [State]) {
             s.remaining -= 1;
             State::Busy
         } else if s.next < s.service.len() {
-            let available = match s.feeder {
-                Some(f) => sims[f].occ > 0,
+            let s = &sims[i];
+            let available = match (s.feeder, &s.lines) {
+                (Some(f), _) => sims[f].occ > 0,
+                // A streamed reader: the writer's chain has started and its rows are there.
+                (None, Some(l)) => {
+                    sims[..l.source].iter().all(Sim::done)
+                        && l.readable(s.next, l.complete(sims[l.source].out))
+                }
                 // A chain head starts when every stage before it has finished.
-                None => sims[..i].iter().all(Sim::done),
+                (None, None) => sims[..i].iter().all(Sim::done),
             };
-            if available {
+            let fits = s.reader.is_none_or(|r| {
+                let (l, rd) = (&sims[r].lines, &sims[r]);
+                l.as_ref()
+                    .is_none_or(|l| l.fits(s.next, Sim::served(rd.next, rd.remaining)))
+            });
+            if available && !fits {
+                sims[i].blocked = true;
+                State::Stalled
+            } else if available {
                 let s = &mut sims[i];
                 s.remaining = s.service[s.next] - 1;
                 s.next += 1;
@@ -245,6 +285,10 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
                 occ: 0,
                 depth: w.stages[i].fifo,
                 feeder: w.stages[i].feeder,
+                out: 0,
+                lines: w.stages[i].lines.clone(),
+                reader: w.reader(i),
+                blocked: false,
             }
         })
         .collect();

@@ -17,6 +17,8 @@ struct Sim {
     /// FIFO to the next stage: occupancy and depth (`None` for a sink).
     occ: u32,
     depth: Option<u32>,
+    /// Tokens that have left the pipeline.
+    out: usize,
 }
 
 impl Sim {
@@ -41,11 +43,13 @@ pub fn simulate_stepwise(w: &Workload, mut trace: Option<&mut Trace>) -> SimResu
                 latency: w.stages[i].timing.latency,
                 occ: 0,
                 depth: w.stages[i].fifo,
+                out: 0,
             }
         })
         .collect();
     let ns = sims.len();
     let feeder: Vec<Option<usize>> = w.stages.iter().map(|s| s.feeder).collect();
+    let reader: Vec<Option<usize>> = (0..ns).map(|i| w.reader(i)).collect();
     let mut counts = vec![[0u64; 4]; ns];
     let mut fifo_max = vec![0u32; ns];
     let mut states = vec![State::Idle; ns];
@@ -69,21 +73,37 @@ pub fn simulate_stepwise(w: &Workload, mut trace: Option<&mut Trace>) -> SimResu
                         sims[i].pipe.pop_front();
                     }
                 }
+                sims[i].out += 1;
             }
             for r in sims[i].pipe.iter_mut() {
                 *r = r.saturating_sub(1);
             }
-            let available = match feeder[i] {
-                Some(f) => sims[f].occ > 0,
+            let next = sims[i].next;
+            let available = match (feeder[i], &w.stages[i].lines) {
+                (Some(f), _) => sims[f].occ > 0,
+                // A streamed reader: the writer's chain has started and its rows are there.
+                (None, Some(l)) => {
+                    sims[..l.source].iter().all(Sim::done)
+                        && l.readable(next, l.complete(sims[l.source].out))
+                }
                 // A chain head starts when every stage before it has finished.
-                None => sims[..i].iter().all(Sim::done),
+                (None, None) => sims[..i].iter().all(Sim::done),
+            };
+            // A line-buffer writer waits for the space its next token's rows need.
+            let fits = match reader[i].map(|r| (&w.stages[r].lines, &sims[r])) {
+                Some((Some(l), rd)) if next < sims[i].service.len() => {
+                    l.fits(next, rd.next - usize::from(rd.remaining > 0))
+                }
+                _ => true,
             };
             let s = &mut sims[i];
             let state = if s.remaining > 0 {
                 s.remaining -= 1;
                 State::Busy
             } else if s.next < s.service.len() {
-                if available {
+                if available && !fits {
+                    State::Stalled
+                } else if available {
                     s.remaining = s.service[s.next] - 1;
                     s.next += 1;
                     if let Some(f) = feeder[i] {

@@ -6,7 +6,7 @@ use super::images::{self, Picture};
 use super::plots::{self, Frame, Mark, Series};
 use super::render::{LayerNote, dof_layers};
 use super::timeline::timeline;
-use crate::config::HwConfig;
+use crate::config::{DofSchedule, HwConfig};
 use crate::pipeline::Render;
 use crate::pipeline::report::gamma_spec;
 use crate::scene::Scene;
@@ -124,31 +124,56 @@ pub fn plots(scene: &Scene, hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
         svg,
         SIZE,
     ));
-    // The stage timeline of the cycle simulation.
-    let t = timeline(&r.workload, 400);
-    let names: Vec<String> = r
-        .report
-        .cycles
-        .stages
-        .iter()
-        .map(|s| s.name.clone())
-        .collect();
-    let size = (1240, 90 + 46 * names.len() as u32);
-    let f = Frame {
-        title: "cycle simulation: stage states over the frame".into(),
-        x: format!("cycle (bins of {})", t.bin),
-        y: String::new(),
-        size,
-    };
-    let svg = plots::timeline(&f, &t, &names).map_err(|e| plot_error("timeline", e))?;
-    v.push(svg_picture(
-        &f.title,
-        "per stage, the share of each bin's cycles busy, stalled (the next FIFO full), starved (waiting for input) and idle".into(),
-        svg,
-        size,
-    ));
+    v.extend(timelines(hw, r)?);
     if let Some(p) = sigma_plot(scene, hw, r)? {
         v.push(p);
+    }
+    Ok(v)
+}
+
+/// The stage timelines of the cycle simulation: every timed stage of the plan under the
+/// chosen depth-of-field schedule and, with a stage that streams, under the other one, on
+/// the same cycle axis with bins of about the same length.
+fn timelines(hw: &HwConfig, r: &Render) -> Result<Vec<Picture>> {
+    let first = timeline(&r.workload, 400);
+    let mut runs = vec![(r.workload.clone(), first.clone())];
+    if let Some(both) = &r.report.cycles.schedules {
+        let (other, cycles) = match r.workload.schedule {
+            DofSchedule::Stream => (DofSchedule::Frame, both.frame.cycles),
+            DofSchedule::Frame => (DofSchedule::Stream, both.stream.cycles),
+        };
+        let w = r.workload_for(&hw.cycles, other);
+        let t = timeline(&w, (cycles / first.bin) as usize + 1);
+        runs.push((w, t));
+    }
+    let span = runs.iter().map(|(_, t)| t.total).max().unwrap_or(0);
+    let mut v = Vec::new();
+    for (w, t) in &runs {
+        let names: Vec<String> = w.stages.iter().map(|s| s.id.name().to_string()).collect();
+        let size = (1240, 90 + 46 * names.len() as u32);
+        let schedule = match (&r.report.cycles.schedules, w.schedule) {
+            (None, _) => String::new(),
+            (Some(_), s) => format!(", dof.schedule = \"{}\"", s.name()),
+        };
+        let f = Frame {
+            title: format!(
+                "cycle simulation: stage states over the frame{schedule} ({} cycles)",
+                t.total
+            ),
+            x: format!("cycle (bins of {})", t.bin),
+            y: String::new(),
+            size,
+        };
+        let svg = plots::timeline(&f, t, &names, span).map_err(|e| plot_error("timeline", e))?;
+        v.push(svg_picture(
+            &f.title,
+            format!(
+                "per timed stage ({}), the share of each bin's cycles busy, stalled (the next FIFO or the line buffers full), starved (waiting for input) and idle",
+                names.join(", ")
+            ),
+            svg,
+            size,
+        ));
     }
     Ok(v)
 }

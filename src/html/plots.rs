@@ -181,12 +181,12 @@ pub const STATE_COLOURS: [(State, &str, RGBColor); 4] = [
 ];
 
 /// One band per stage (first on top); within a bin the band is split by the share of each
-/// state, busy at the bottom.
-pub fn timeline(f: &Frame, t: &Timeline, names: &[String]) -> DrawResult<String> {
+/// state, busy at the bottom. The cycle axis runs to `span` (at least the frame).
+pub fn timeline(f: &Frame, t: &Timeline, names: &[String], span: u64) -> DrawResult<String> {
     let ns = t.counts.len();
     svg(f, 90, |mut b| {
         let mut chart = b
-            .build_cartesian_2d(0f64..t.total.max(1) as f64, 0f64..ns as f64)
+            .build_cartesian_2d(0f64..span.max(t.total).max(1) as f64, 0f64..ns as f64)
             .map_err(err)?;
         chart
             .configure_mesh()

@@ -237,7 +237,7 @@ pub fn page(scene: &Scene, hw: &HwConfig, r: &Render) -> figures::Result<RenderP
             ms(rep.timing.float_ms),
             rep.overflows,
         ),
-        cycles: rep.cycles.summary_lines().into(),
+        cycles: rep.cycles.summary_lines(),
         cycle_rows: rep
             .cycles
             .stages

@@ -58,6 +58,8 @@ mod tests {
             item: "items",
             items,
             port_bits: Vec::new(),
+            rows: vec![],
+            stream: None,
         }
     }
 
@@ -70,6 +72,7 @@ mod tests {
             &[(StageId::Setup, Some(&a)), (StageId::Raster, Some(&b))],
             &cfg,
             ScreenFacts::default(),
+            crate::config::DofSchedule::Stream,
         );
         let r = simulate(&w, None);
         for bins in [1, 7, 64, 10_000] {

@@ -149,7 +149,9 @@ fn local_of(v: &serde_json::Value) -> Option<LocalError> {
 }
 
 impl Merge {
-    fn add(&mut self, o: &Outcome, pack_images: bool) {
+    /// Adds a band's outcome; `y0`: the band's first screen row (its tokens' rows are the
+    /// band's own).
+    fn add(&mut self, o: &Outcome, pack_images: bool, y0: u32) {
         let r = &o.report;
         match &mut self.report {
             None => self.report = Some(r.clone()),
@@ -187,6 +189,11 @@ impl Merge {
             }
         }
         if let Some(t) = &o.tokens {
+            let mut t = t.clone();
+            for r in &mut t.rows {
+                *r += y0;
+            }
+            let t = &t;
             match &mut self.tokens {
                 None => self.tokens = Some(t.clone()),
                 Some(m) if m.kind == TokenKind::Primitive => {
@@ -200,6 +207,7 @@ impl Merge {
                 Some(m) => {
                     m.items.extend_from_slice(&t.items);
                     m.port_bits.extend_from_slice(&t.port_bits);
+                    m.rows.extend_from_slice(&t.rows);
                 }
             }
         }
@@ -445,7 +453,7 @@ pub fn run(
                 pool,
             };
             let (o, fixed) = execute_keep(st, &cx, &taps)?;
-            merged[j].add(&o, id != StageId::Accumulate);
+            merged[j].add(&o, id != StageId::Accumulate, b.y0);
             taps = o.taps;
             if id == StageId::Accumulate {
                 let band = taps.fixed.frame();

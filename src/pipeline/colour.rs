@@ -175,7 +175,7 @@ pub fn channel(
     let contours = perceptual::contours(&dac, &dac_ref, &ideal.ideal, &display);
     let stages: Vec<StageReport> = lane.iter().map(|s| s.outcome.report.clone()).collect();
     let frame: Vec<Step> = geometry.iter().chain(lane).cloned().collect();
-    let workload = workload(plan, &frame, &hw.cycles);
+    let workload = workload(plan, &frame, &hw.cycles, hw.dof.schedule);
     let simulate = || (cycles::simulate(&workload, None), 0.0);
     let sim = match cache {
         Some(k) => k.sim(workload.key(), simulate).0,

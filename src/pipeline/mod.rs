@@ -101,9 +101,14 @@ impl Render {
             None => self.frame(),
         }
     }
-    /// The cycle model's workload of this run under other timings (same tokens).
-    pub fn workload_for(&self, c: &crate::config::CyclesCfg) -> Workload {
-        report::workload(&self.plan, &self.steps, c)
+    /// The cycle model's workload of this run under other timings or another
+    /// depth-of-field schedule (same tokens).
+    pub fn workload_for(
+        &self,
+        c: &crate::config::CyclesCfg,
+        schedule: crate::config::DofSchedule,
+    ) -> Workload {
+        report::workload(&self.plan, &self.steps, c, schedule)
     }
     /// The float reference's frame (frame LSBs) the gamma stage read.
     pub fn frame_ref(&self) -> &[f64] {

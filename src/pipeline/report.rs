@@ -6,7 +6,7 @@ use super::cache::Cache;
 use super::plan::{Plan, PlanReport};
 use super::run::Step;
 use crate::compare::{self, CodeCompare, DisplayModel, WeberCompare};
-use crate::config::HwConfig;
+use crate::config::{DofSchedule, HwConfig};
 use crate::cost;
 use crate::cycles::{self, CycleReport, ScreenFacts, SimResult, Workload};
 use crate::fnv::Fnv;
@@ -146,8 +146,13 @@ pub(super) fn ideal(scene: &Scene, hw: &HwConfig, steps: &[Step], cache: Option<
 }
 
 /// The cycle model's workload of a run: the planned stages' tokens chained under the
-/// timings `c`.
-pub fn workload(plan: &Plan, steps: &[Step], c: &crate::config::CyclesCfg) -> Workload {
+/// timings `c` and the depth-of-field `schedule`.
+pub fn workload(
+    plan: &Plan,
+    steps: &[Step],
+    c: &crate::config::CyclesCfg,
+    schedule: DofSchedule,
+) -> Workload {
     let l = &plan.layout;
     let planned: Vec<(StageId, Option<&crate::stage::Tokens>)> = steps
         .iter()
@@ -163,7 +168,21 @@ pub fn workload(plan: &Plan, steps: &[Step], c: &crate::config::CyclesCfg) -> Wo
             pixels_simulated: l.tiles.touched_pixels(&l.region),
             screen_pixels: l.grid.pixels(),
         },
+        schedule,
     )
+}
+
+/// The simulation of `w` and its wall time, seconds (reusing a cached one).
+fn cached_sim(w: &Workload, cache: Option<&Cache>) -> Arc<(SimResult, f64)> {
+    let simulate = || {
+        let t = Instant::now();
+        let r = cycles::simulate(w, None);
+        (r, t.elapsed().as_secs_f64())
+    };
+    match cache {
+        Some(c) => c.sim(w.key(), simulate).0,
+        None => Arc::new(simulate()),
+    }
 }
 
 /// What the fixed model's steps give without a reference: every stage's report, the totals
@@ -208,25 +227,32 @@ pub(super) fn totals(
         .iter()
         .flat_map(|s| s.outcome.packs.iter().cloned())
         .collect();
-    let workload = workload(plan, steps, &hw.cycles);
-    let simulate = || {
-        let t = Instant::now();
-        let r = cycles::simulate(&workload, None);
-        (r, t.elapsed().as_secs_f64())
+    let chosen = workload(plan, steps, &hw.cycles, hw.dof.schedule);
+    let other_schedule = match hw.dof.schedule {
+        DofSchedule::Stream => DofSchedule::Frame,
+        DofSchedule::Frame => DofSchedule::Stream,
     };
-    let sim: Arc<(SimResult, f64)> = match cache {
-        Some(c) => c.sim(workload.key(), simulate).0,
-        None => Arc::new(simulate()),
-    };
+    let other = workload(plan, steps, &hw.cycles, other_schedule);
+    let workload = chosen;
+    let sim = cached_sim(&workload, cache);
     let (sim, wall) = (&sim.0, sim.1);
+    let other_sim = cached_sim(&other, cache);
     let cycles = cycles::report(
         &workload,
         plan.order(),
         hw.cycles.clock_mhz,
         scene.display.refresh_hz,
-        cost::summarize(&all, packed),
+        // Every channel's lane streams its own depth of field.
+        cost::summarize(&all, packed).with_line_buffers(
+            workload.line_buffer_bits()
+                * (1 + lanes
+                    .iter()
+                    .filter(|l| l.iter().any(|s| s.id == StageId::Dof))
+                    .count() as u64),
+        ),
         sim,
         wall,
+        (&other, &other_sim.0),
     );
     let timing = Timing {
         host_ms: plan.host_ms,

@@ -418,6 +418,8 @@ impl Stage for Input {
             item: "vertices",
             items: fixed.1.clone(),
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         })
     }
 

@@ -29,8 +29,8 @@ pub use contract::{AnyFixed, Cx, DynStage, Memo, Need, NoMemo, RunOptions, Stage
 pub use layout::{Band, Grid, Layout, Region, SampleRegion, Tiles};
 pub use pool::Pool;
 pub use report::{
-    Cost, Facts, LocalError, MemImage, MemKind, Memory, Notes, StageReport, TokenKind, Tokens,
-    Unit, WeberCompare, ms_since, weber_of,
+    Cost, Facts, LocalError, MemImage, MemKind, Memory, Notes, RowStream, StageReport, TokenKind,
+    Tokens, Unit, WeberCompare, ms_since, weber_of,
 };
 pub use taps::{ChannelFrames, FixedTaps, FloatTaps, PixelTap, PixelTapF, Taps};
 

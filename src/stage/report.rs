@@ -248,6 +248,25 @@ pub struct Tokens {
     pub items: Vec<u64>,
     /// Bits each token moves over the frame-memory port (empty: none).
     pub port_bits: Vec<u64>,
+    /// First screen row each token writes (empty: the tokens are not rows of the frame);
+    /// the accumulate stage's tiles, which the streamed depth of field waits for.
+    pub rows: Vec<u32>,
+    /// The same work as screen rows, for a stage that can stream behind accumulate
+    /// (`dof.schedule = "stream"`; `None`: it runs on the finished frame only).
+    pub stream: Option<RowStream>,
+}
+
+/// A depth-of-field stage's work as a stream of screen rows (docs/cycles.md, "Streamed
+/// depth of field").
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct RowStream {
+    /// Items per screen row, top to bottom (their sum is the tokens' items).
+    pub items: Vec<u64>,
+    /// Largest blur radius of the plan, rows: output row `y` reads input rows
+    /// `y - radius ..= y + radius`.
+    pub radius: u32,
+    /// Bits per pixel the stage reads from its input (the line buffers' word).
+    pub read_bits: u32,
 }
 
 /// The contents of one memory of a stage, for the pack check and `--rom-out`: `fields`

@@ -431,6 +431,8 @@ impl Stage for SetupStage {
             item: "primitives",
             items: vec![1; *n],
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         })
     }
 

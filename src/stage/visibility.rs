@@ -548,6 +548,8 @@ impl Stage for Visibility {
             item: "depth tests",
             items: tests.clone(),
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         })
     }
 

@@ -128,6 +128,33 @@ impl AlphaNorm {
     }
 }
 
+/// When the depth-of-field stage runs against the accumulate stage (`dof.schedule`,
+/// docs/cycles.md "Streamed depth of field"). Timing only: the images are the same.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DofSchedule {
+    /// On the finished frame: accumulate writes the whole frame memory, then the stage runs.
+    Frame,
+    /// Streamed (the default): rows flow from accumulate into line buffers holding the
+    /// largest blur radius of the plan, and a row starts as soon as the rows it reads are
+    /// complete; accumulate stalls while the line buffers are full.
+    #[default]
+    Stream,
+}
+
+impl DofSchedule {
+    /// Both schedules, the default first.
+    pub const ALL: [DofSchedule; 2] = [DofSchedule::Stream, DofSchedule::Frame];
+
+    /// The name in a hardware file.
+    pub fn name(self) -> &'static str {
+        match self {
+            DofSchedule::Frame => "frame",
+            DofSchedule::Stream => "stream",
+        }
+    }
+}
+
 /// `dof.sigma_rom_bits`: depth-code bits that index the sigma ROM (`2^bits + 1` entries
 /// plus one for infinity).
 pub const SIGMA_ROM_BITS: std::ops::RangeInclusive<u32> = 4..=16;
@@ -152,6 +179,8 @@ pub struct DofCfg {
     pub kind: DofKind,
     /// The mask shape of the layered method and the downsample method's small blur.
     pub kernel: DofKernel,
+    /// When the stage runs: on the finished frame or streamed behind accumulate.
+    pub schedule: DofSchedule,
     /// The blur per depth code.
     pub sigma: SigmaForm,
     /// Depth-code bits indexing the sigma ROM (`sigma = "paper"`).
@@ -273,6 +302,7 @@ impl DofCfg {
 pub(crate) struct RawDof {
     kind: Option<DofKind>,
     kernel: Option<DofKernel>,
+    schedule: Option<DofSchedule>,
     sigma: Option<SigmaForm>,
     sigma_rom_bits: Option<u32>,
     p: Option<f64>,
@@ -296,6 +326,7 @@ impl RawDof {
     pub(crate) fn apply(self, c: &mut DofCfg) {
         set(&mut c.kind, self.kind);
         set(&mut c.kernel, self.kernel);
+        set(&mut c.schedule, self.schedule);
         set(&mut c.sigma, self.sigma);
         set(&mut c.sigma_rom_bits, self.sigma_rom_bits);
         set(&mut c.p, self.p);

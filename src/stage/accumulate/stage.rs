@@ -245,9 +245,10 @@ impl Stage for Accumulate {
         let l = cx.layout;
         let taps = (a.kernel.size * a.kernel.size) as u64;
         let bits = frame_bits(cx.hw, a) as u64;
-        let (mut items, mut port_bits) = (Vec::new(), Vec::new());
+        let (mut items, mut port_bits, mut rows) = (Vec::new(), Vec::new(), Vec::new());
         for (t, r) in l.tiles.binned_in(&l.region) {
             items.push(r.pixels() * taps);
+            rows.push(r.y0);
             port_bits.push(a.tile_rmw.get(t).copied().unwrap_or(0) * 2 * bits);
         }
         Some(Tokens {
@@ -255,6 +256,8 @@ impl Stage for Accumulate {
             item: "MACs",
             items,
             port_bits,
+            rows,
+            stream: None,
         })
     }
 

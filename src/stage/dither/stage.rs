@@ -152,6 +152,8 @@ impl Stage for DitherStage {
             item: "pixels",
             items,
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         })
     }
 

@@ -10,7 +10,7 @@ use super::{
 use crate::config::DofKernel;
 use crate::error::{Error, Result};
 use crate::stage::accumulate::Frame;
-use crate::stage::{Cost, Cx, Facts, MemImage, TokenKind, Tokens};
+use crate::stage::{Cost, Cx, Facts, MemImage, RowStream, TokenKind, Tokens};
 
 /// The layered method.
 pub struct Layered;
@@ -91,7 +91,7 @@ impl Method for Layered {
     fn tokens(&self, cx: &Cx, plan: &LayerPlan) -> Tokens {
         let g = &cx.layout.grid;
         let layers = layer_work(plan, g.width as usize, g.height as usize);
-        let items = if cx.hw.dof.skip_uniform_tiles {
+        let items: Vec<u64> = if cx.hw.dof.skip_uniform_tiles {
             let scan = |l: &LayerWork| if l.taps > 1 { l.pixels } else { 0 };
             layers
                 .iter()
@@ -108,11 +108,14 @@ impl Method for Layered {
         } else {
             layers.iter().map(|l| 2 * l.pixels).collect()
         };
+        let stream = stream(plan, &items, g.width, g.height, cx);
         Tokens {
             kind: TokenKind::Layer,
             item: "pass outputs",
             items,
             port_bits: vec![],
+            rows: vec![],
+            stream: Some(stream),
         }
     }
 
@@ -133,5 +136,38 @@ impl Method for Layered {
         let mut m = vec![super::coefficient_image(plan, &cx.hw.dof)];
         m.extend(super::sigma_rom_image(lens));
         m
+    }
+}
+
+/// The layers' work as screen rows (the streamed schedule): each layer's pass outputs
+/// `items` (one per layer with a box, as [`super::layer_work`]) spread evenly over the rows
+/// of its box, the remainder on its first rows. Exact without `dof.skip_uniform_tiles`
+/// (every row of a box has its width of outputs per pass); with it, a layer's skipped
+/// tiles and scans are spread evenly too (an approximation: the per-row count of skipped
+/// pixels is not kept). The radius is the largest margin a layer's passes reach (its
+/// `M`, `2 M` with `dof.alpha_norm = "behind"`); a pixel read is the frame word, its
+/// coverage (`log2(n2) + 1` bits, as the alpha planes) and its layer index.
+fn stream(plan: &LayerPlan, items: &[u64], width: u32, height: u32, cx: &Cx) -> RowStream {
+    let (w, h) = (width as usize, height as usize);
+    let mut rows = vec![0u64; h];
+    let boxes = super::layers::layer_boxes(w, h, plan).into_iter().flatten();
+    for ((_, y0, _, y1), &n) in boxes.zip(items) {
+        let span = (y1 - y0) as u64;
+        for (k, r) in rows[y0..y1].iter_mut().enumerate() {
+            *r += n / span + u64::from((k as u64) < n % span);
+        }
+    }
+    let radius = plan
+        .layers
+        .iter()
+        .map(|l| plan.margin(l.m))
+        .max()
+        .unwrap_or(0) as u32;
+    let a_bits = n2(cx).next_power_of_two().trailing_zeros() + 1;
+    let index_bits = (plan.layers.len().max(2) - 1).ilog2() + 1;
+    RowStream {
+        items: rows,
+        radius,
+        read_bits: cx.hw.accumulate.frame.format.total_bits() + a_bits + index_bits,
     }
 }

@@ -249,6 +249,8 @@ impl Stage for Gamma {
             item: "pixels",
             items,
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         })
     }
 

@@ -232,6 +232,8 @@ impl Stage for Logdomain {
             item: "codes",
             items: e.codes.clone(),
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         })
     }
 

@@ -285,6 +285,8 @@ impl Stage for Raster {
             item: "samples stepped",
             items: stepped.clone(),
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         })
     }
 

@@ -4,6 +4,7 @@
 use crate::args::{HdlDirs, SceneArgs};
 use crate::out::outln;
 use clap::Args;
+use igemu::cost::LINE_BUFFERS;
 use igemu::error::Error;
 use igemu::hdl;
 use igemu::hdl::synth::SynthCells;
@@ -65,6 +66,7 @@ pub fn run(a: CostArgs) -> Result<ExitCode, Error> {
             "scene": scene.name,
             "synth": a.synth,
             "stages": stages,
+            "line_buffers": line_buffers(&r.report.cycles),
         });
         outln!(
             "{}",
@@ -111,7 +113,36 @@ pub fn run(a: CostArgs) -> Result<ExitCode, Error> {
             row.multipliers
         );
     }
+    if let Some(lb) = &r.report.cycles.schedules {
+        let s = &lb.stream;
+        outln!(
+            "{LINE_BUFFERS}: {} bits ({} rows; dof.schedule = \"{}\"{})",
+            s.line_buffer_bits,
+            s.line_buffer_rows,
+            lb.chosen.name(),
+            if r.report.cycles.cost.line_buffer_bits > 0 {
+                ""
+            } else {
+                ", not charged"
+            }
+        );
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The streamed depth-of-field schedule's line buffers as JSON: null without a stage that
+/// streams, else `{schedule, bits, rows, charged}` (`charged`: the chosen schedule is
+/// "stream", so the cycle report's cost includes them).
+fn line_buffers(c: &igemu::cycles::CycleReport) -> serde_json::Value {
+    match &c.schedules {
+        None => serde_json::Value::Null,
+        Some(b) => serde_json::json!({
+            "schedule": b.chosen.name(),
+            "bits": b.stream.line_buffer_bits,
+            "rows": b.stream.line_buffer_rows,
+            "charged": c.cost.line_buffer_bits > 0,
+        }),
+    }
 }
 
 /// One stage's row of the cost table.

@@ -54,6 +54,8 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
             Some(&mut |t, st: &[cycles::State], occ: &[u32]| w.cycle(t, st, occ)),
         );
         let wall = t.elapsed().as_secs_f64();
+        // The same frame (the comparison with the other schedule is kept).
+        let schedules = c.schedules.take();
         c = cycles::report(
             &r.workload,
             r.plan.order(),
@@ -62,7 +64,9 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
             c.cost.clone(),
             &sim,
             wall,
+            (&r.workload, &sim),
         );
+        c.schedules = schedules;
         w.finish(c.total_cycles).map_err(io)?.commit()?;
     }
     if a.json {

@@ -184,5 +184,7 @@ pub fn tokens(plan: &DownPlan) -> Tokens {
         item: "outputs",
         items,
         port_bits: vec![],
+        rows: vec![],
+        stream: None,
     }
 }

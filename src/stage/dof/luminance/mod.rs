@@ -224,6 +224,8 @@ impl Method for Luminance {
             item: "pass outputs",
             items: vec![2 * u64::from(g.width); g.height as usize],
             port_bits: vec![],
+            rows: vec![],
+            stream: None,
         }
     }
 
