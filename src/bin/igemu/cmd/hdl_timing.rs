@@ -1,0 +1,138 @@
+//! `igemu hdl timing`: each HDL model's latency and initiation interval measured under
+//! Verilator (full rate and with injected stalls) beside the `[cycles.<stage>]` values of
+//! the chosen hardware; exit 1 naming the stage and field where they disagree.
+
+use crate::args::{HdlDirs, SceneArgs, arg_error};
+use crate::out::outln;
+use clap::builder::PossibleValue;
+use clap::{Args, ValueEnum};
+use igemu::error::Error;
+use igemu::hdl::timing::{self, Measured, TIMED, Timed};
+use igemu::hdl::verilator::Sim;
+use std::path::Path;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct HdlTimingArgs {
+    /// Only this stage (default: the six stages with an HDL model).
+    #[arg(long, value_enum)]
+    pub stage: Option<TimedArg>,
+    #[command(flatten)]
+    pub s: SceneArgs,
+    #[command(flatten)]
+    pub dirs: HdlDirs,
+}
+
+/// A stage whose `[cycles.<stage>]` timing an HDL model implements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TimedArg(pub Timed);
+
+impl ValueEnum for TimedArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        static ALL: [TimedArg; 6] = [
+            TimedArg(TIMED[0]),
+            TimedArg(TIMED[1]),
+            TimedArg(TIMED[2]),
+            TimedArg(TIMED[3]),
+            TimedArg(TIMED[4]),
+            TimedArg(TIMED[5]),
+        ];
+        &ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.0.timing.name()))
+    }
+}
+
+/// The Verilator check every RTL measurement needs: an error naming what to install.
+pub fn need_verilator(flag: &str) -> Result<(), Error> {
+    if Sim::Verilator.available() {
+        return Ok(());
+    }
+    Err(arg_error(
+        flag,
+        "RTL timing is measured under Verilator, which is not installed (it needs verilator, make and g++: apt-get install -y verilator make g++)".into(),
+    ))
+}
+
+/// Measures the chosen stages' RTL on the scene and hardware of `s` (Verilator builds cached
+/// under `cache`); each with its bench note.
+pub fn measure_all(
+    stages: &[Timed],
+    s: &SceneArgs,
+    cache: &Path,
+) -> Result<Vec<(Measured, Option<String>)>, Error> {
+    let scene = s.scene()?;
+    let hw = s.hw()?;
+    stages
+        .iter()
+        .map(|&t| timing::measure_stage(t, &scene, &hw, cache))
+        .collect()
+}
+
+/// Runs `igemu hdl timing`.
+pub fn run(a: HdlTimingArgs) -> Result<ExitCode, Error> {
+    need_verilator("hdl timing")?;
+    let cache = a.dirs.apply()?.join("hdl-verilator");
+    let hw = a.s.hw()?;
+    let stages: Vec<Timed> = match a.stage {
+        Some(t) => vec![t.0],
+        None => TIMED.to_vec(),
+    };
+    let measured = measure_all(&stages, &a.s, &cache)?;
+    outln!(
+        "hdl timing | hardware `{}` | Verilator, per module instance (the model's lanes = instances x lanes per instance)",
+        hw.name
+    );
+    outln!(
+        "{:<11} {:<15} {:>11} {:>13} {:>13} {:>15} {:>8} {:>8}  verdict",
+        "stage",
+        "module",
+        "latency",
+        "ii full",
+        "ii stalled",
+        "lanes",
+        "vectors",
+        "stalls"
+    );
+    let mut bad = Vec::new();
+    for (m, note) in &measured {
+        let Some(&t) = hw.cycles.timing(m.timed.timing) else {
+            continue;
+        };
+        let miss = timing::compare(m, &t);
+        outln!(
+            "{:<11} {:<15} {:>11} {:>13} {:>13} {:>15} {:>8} {:>8}  {}",
+            m.timed.timing.name(),
+            m.timed.module,
+            format!("{} / {}", m.latency, t.latency),
+            format!("{:.3} / {}", m.ii_full.value(), t.ii),
+            format!("{:.3} / {}", m.ii_stall.value(), t.ii),
+            format!(
+                "{} = {} x {}",
+                t.lanes,
+                t.lanes / m.timed.lanes,
+                m.timed.lanes
+            ),
+            m.items,
+            m.stalls,
+            if miss.is_empty() { "agree" } else { "DISAGREE" }
+        );
+        if let Some(n) = note {
+            outln!("  ({}: {n})", m.timed.timing.name());
+        }
+        bad.extend(miss);
+    }
+    outln!(
+        "latency, ii: RTL / [cycles.<stage>]; ii stalled: net of the stall cycles (the testbench withheld an input or held back a valid output); lanes: model = instances x lanes per instance"
+    );
+    for m in &bad {
+        outln!("mismatch: {m} (hardware `{}`)", hw.name);
+    }
+    Ok(if bad.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
