@@ -269,7 +269,9 @@ pub fn with_measured(c: &CyclesCfg, measured: &[Measured]) -> CyclesCfg {
 pub const LOG_PRESET: &str = "log8-logadd";
 
 /// The bench that times `timed` on `scene` and `hw`, and a note when it comes from another
-/// configuration: the log adder's from [`LOG_PRESET`] when `hw` has no log adder.
+/// configuration: where `hw` has no such module (no log adder on linear hardware, no linear
+/// MAC on log-add hardware) the bench is built on [`LOG_PRESET`] for the log adder, on the
+/// first preset for the others.
 pub fn bench_for(
     timed: Timed,
     scene: &crate::scene::Scene,
@@ -277,18 +279,22 @@ pub fn bench_for(
 ) -> crate::error::Result<(Bench, Option<String>)> {
     match super::vectors(timed.vectors, scene, hw) {
         Ok(b) => Ok((b, None)),
-        Err(e) if timed.timing == StageId::Logdomain => {
-            let log = crate::config::HwConfig::preset(LOG_PRESET).ok_or(e)?;
-            let b = super::vectors(timed.vectors, scene, &log)?;
+        Err(e) => {
+            let name = if timed.timing == StageId::Logdomain {
+                LOG_PRESET
+            } else {
+                crate::config::PRESETS[0]
+            };
+            let other = crate::config::HwConfig::preset(name).ok_or(e)?;
+            let b = super::vectors(timed.vectors, scene, &other)?;
             Ok((
                 b,
                 Some(format!(
-                    "bench from preset {LOG_PRESET}: hardware `{}` has no log adder",
-                    hw.name
+                    "bench from preset {name}: hardware `{}` has no {}",
+                    hw.name, timed.module
                 )),
             ))
         }
-        Err(e) => Err(e),
     }
 }
 

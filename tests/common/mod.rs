@@ -2,6 +2,8 @@
 //! a synthetic lens.
 #![allow(dead_code)]
 
+pub mod sims;
+
 use igemu::config::HwConfig;
 use igemu::files::TomlFile;
 use igemu::scene::Scene;
