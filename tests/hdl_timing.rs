@@ -196,3 +196,60 @@ fn deeper_rtl_is_measured_and_disagrees() {
         "{out}"
     );
 }
+
+/// The gamma line of an `igemu cycles` table and the frame line.
+fn gamma_and_frame(out: &str) -> (String, String) {
+    let find = |p: &str| {
+        out.lines()
+            .find(|l| l.starts_with(p))
+            .unwrap_or_else(|| panic!("no {p} line: {out}"))
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    (find("gamma "), find("frame: "))
+}
+
+/// `cycles --timing-from-rtl` replaces a hardware file's latency and ii by the RTL's: a
+/// gamma latency of 5 becomes the measured 2 and the frame time is the preset's again.
+#[test]
+fn cycles_timing_from_rtl_uses_the_measured_values() {
+    if !verilator("cycles --timing-from-rtl") {
+        return;
+    }
+    let d = tmp("from-rtl");
+    let f = d.join("gamma5.toml");
+    std::fs::write(
+        &f,
+        "preset = \"linear12\"\n[cycles.gamma]\nlatency = 5\nii = 3\n",
+    )
+    .expect("hw");
+    let fs = f.display().to_string();
+    let cache = cache();
+    let (c, preset, err) = igemu(&["cycles"]);
+    assert_eq!(c, 0, "{err}");
+    let (c, typed, err) = igemu(&["cycles", "--hw", &fs]);
+    assert_eq!(c, 0, "{err}");
+    let (c, rtl, err) = igemu(&[
+        "cycles",
+        "--hw",
+        &fs,
+        "--timing-from-rtl",
+        "--cache-dir",
+        &cache,
+    ]);
+    assert_eq!(c, 0, "{err}");
+    let (p, t, r) = (
+        gamma_and_frame(&preset),
+        gamma_and_frame(&typed),
+        gamma_and_frame(&rtl),
+    );
+    assert!(t.0.starts_with("gamma 1 5 3 "), "{}", t.0);
+    assert!(r.0.starts_with("gamma 1 2 1 "), "{}", r.0);
+    assert_ne!(t.1, p.1);
+    assert_eq!(r, p);
+    assert!(
+        rtl.contains("timing from the RTL (Verilator): raster latency 4 ii 1.000"),
+        "{rtl}"
+    );
+}

@@ -71,6 +71,36 @@ pub fn measure_all(
         .collect()
 }
 
+/// `igemu cycles --timing-from-rtl`: the hardware's `[cycles]` with the latency and ii
+/// measured from the six HDL models on the scene and hardware of `s`, and a line naming them.
+pub fn rtl_cycles(
+    s: &SceneArgs,
+    dirs: &HdlDirs,
+    hw: &igemu::config::HwConfig,
+) -> Result<(igemu::config::CyclesCfg, String), Error> {
+    need_verilator("--timing-from-rtl")?;
+    let cache = dirs.apply()?.join("hdl-verilator");
+    let measured: Vec<Measured> = measure_all(&TIMED, s, &cache)?
+        .into_iter()
+        .map(|(m, _)| m)
+        .collect();
+    let named: Vec<String> = measured
+        .iter()
+        .map(|m| {
+            format!(
+                "{} latency {} ii {:.3}",
+                m.timed.timing,
+                m.latency,
+                m.ii_full.value()
+            )
+        })
+        .collect();
+    Ok((
+        timing::with_measured(&hw.cycles, &measured),
+        format!("timing from the RTL (Verilator): {}", named.join(", ")),
+    ))
+}
+
 /// Runs `igemu hdl timing`.
 pub fn run(a: HdlTimingArgs) -> Result<ExitCode, Error> {
     need_verilator("hdl timing")?;
