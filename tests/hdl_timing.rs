@@ -253,3 +253,39 @@ fn cycles_timing_from_rtl_uses_the_measured_values() {
         "{rtl}"
     );
 }
+
+/// `hdl timing --correlate`: the RTL's cycles on the default scene's token stream (with an
+/// ordered dither planned) are within the documented bound of the model's for the five stages.
+#[test]
+fn the_rtl_on_the_real_token_stream_correlates_with_the_model() {
+    if !verilator("hdl timing --correlate") {
+        return;
+    }
+    let d = tmp("correlate");
+    let f = d.join("bayer4.toml");
+    std::fs::write(&f, "preset = \"linear12\"\n[dither]\nkind = \"bayer4\"\n").expect("hw");
+    let fs = f.display().to_string();
+    let cache = cache();
+    let (c, out, err) = igemu(&[
+        "hdl",
+        "timing",
+        "--correlate",
+        "--hw",
+        &fs,
+        "--cache-dir",
+        &cache,
+    ]);
+    assert_eq!(c, 0, "{out}{err}");
+    for st in ["raster", "accumulate", "dof", "gamma", "dither"] {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("{st} ")))
+            .unwrap_or_else(|| panic!("no {st} line: {out}"));
+        let v: Vec<&str> = line.split_whitespace().collect();
+        let (rtl, model): (f64, f64) = (v[5].parse().expect("rtl"), v[6].parse().expect("model"));
+        assert!(rtl > 1000.0, "{line}");
+        let e = (rtl - model) / model * 100.0;
+        assert!(e.abs() <= igemu::hdl::correlate::BOUND_PCT, "{line}");
+    }
+    assert!(out.contains("not in the plan: logdomain"), "{out}");
+}

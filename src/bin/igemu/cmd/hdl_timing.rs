@@ -7,6 +7,7 @@ use crate::out::outln;
 use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
 use igemu::error::Error;
+use igemu::hdl::correlate::{self as corr, BOUND_PCT};
 use igemu::hdl::timing::{self, Measured, TIMED, Timed};
 use igemu::hdl::verilator::Sim;
 use std::path::Path;
@@ -17,6 +18,9 @@ pub struct HdlTimingArgs {
     /// Only this stage (default: the six stages with an HDL model).
     #[arg(long, value_enum)]
     pub stage: Option<TimedArg>,
+    /// Instead: stream the scene's real token stream of each stage in the plan through its RTL and compare the RTL's cycles with the cycle model's busy cycles + latency (exit 1 beyond the documented error bound).
+    #[arg(long)]
+    pub correlate: bool,
     #[command(flatten)]
     pub s: SceneArgs,
     #[command(flatten)]
@@ -110,6 +114,9 @@ pub fn run(a: HdlTimingArgs) -> Result<ExitCode, Error> {
         Some(t) => vec![t.0],
         None => TIMED.to_vec(),
     };
+    if a.correlate {
+        return correlate(&stages, &a.s, &cache);
+    }
     let measured = measure_all(&stages, &a.s, &cache)?;
     outln!(
         "hdl timing | hardware `{}` | Verilator, per module instance (the model's lanes = instances x lanes per instance)",
@@ -165,4 +172,61 @@ pub fn run(a: HdlTimingArgs) -> Result<ExitCode, Error> {
     } else {
         ExitCode::from(1)
     })
+}
+
+/// `igemu hdl timing --correlate`: the RTL's cycles on the run's token stream against the
+/// cycle model's, per stage of the plan with an HDL model.
+fn correlate(stages: &[Timed], s: &SceneArgs, cache: &Path) -> Result<ExitCode, Error> {
+    let scene = s.scene()?;
+    let hw = s.hw()?;
+    let r = igemu::pipeline::render(&scene, &hw, s.opts(igemu::stage::RunOptions::FAST))?;
+    outln!(
+        "hdl timing --correlate | scene `{}` {}x{} | hardware `{}` | one instance: the busiest lane's ceil(items / lanes) vectors per token, under Verilator",
+        scene.name,
+        r.report.scene.width,
+        r.report.scene.height,
+        hw.name
+    );
+    outln!(
+        "{:<11} {:<15} {:>7} {:>10} {:>9} {:>11} {:>11} {:>9}",
+        "stage",
+        "module",
+        "tokens",
+        "items",
+        "vectors",
+        "RTL cycles",
+        "model",
+        "error"
+    );
+    let mut worst: f64 = 0.0;
+    let mut absent = Vec::new();
+    for &t in stages {
+        let (b, _) = timing::bench_for(t, &scene, &hw)?;
+        let Some(c) = corr::correlate(t, &r.workload, &b, cache)? else {
+            absent.push(t.timing.name());
+            continue;
+        };
+        worst = worst.max(c.error_pct().abs());
+        outln!(
+            "{:<11} {:<15} {:>7} {:>10} {:>9} {:>11} {:>11} {:>8.3}%",
+            t.timing.name(),
+            t.module,
+            c.tokens,
+            c.items,
+            c.vectors,
+            c.rtl_cycles,
+            c.model_cycles(),
+            c.error_pct()
+        );
+    }
+    outln!("model: the stage's busy cycles + latency; error: (RTL - model) / model");
+    if !absent.is_empty() {
+        outln!("not in the plan: {}", absent.join(", "));
+    }
+    if worst > BOUND_PCT {
+        outln!("mismatch: correlation error {worst:.3}% exceeds the bound {BOUND_PCT}%");
+        return Ok(ExitCode::from(1));
+    }
+    outln!("worst error {worst:.3}% within the bound {BOUND_PCT}%");
+    Ok(ExitCode::SUCCESS)
 }
