@@ -7,6 +7,7 @@
 
 mod common;
 
+use common::sims::{REQUIRE, icarus, skip, skip_or_fail, verilator, verilator_cache};
 use common::{hw, scene, tri};
 use igemu::config::HwConfig;
 use igemu::config::{DitherKind, DofKind, FilterKind};
@@ -32,49 +33,6 @@ fn small_scene() -> Scene {
     scene(64, 48, 0.1, &objects)
 }
 
-/// The environment variable that turns every skip into a failure.
-const REQUIRE: &str = "IGEMU_REQUIRE_HDL";
-
-/// Whether the simulators are required (`IGEMU_REQUIRE_HDL=1`).
-fn required() -> bool {
-    std::env::var(REQUIRE).is_ok_and(|v| v == "1")
-}
-
-/// A test part that cannot run: prints its skip line, or fails the test when `require`.
-fn skip_or_fail(line: &str, require: bool) {
-    if require {
-        panic!("{line}; {REQUIRE}=1 requires it: install the simulators or unset {REQUIRE}");
-    }
-    println!("{line}");
-}
-
-/// A skip of the running test (fails it under `IGEMU_REQUIRE_HDL=1`).
-fn skip(line: &str) {
-    skip_or_fail(line, required());
-}
-
-/// Whether Icarus Verilog is installed; prints the skip line when it is not.
-fn icarus(test: &str) -> bool {
-    if hdl::available("iverilog") && hdl::available("vvp") {
-        return true;
-    }
-    skip(&format!(
-        "SKIP {test}: iverilog/vvp not installed (apt-get install -y iverilog); HDL co-simulation not run"
-    ));
-    false
-}
-
-/// Whether Verilator is installed; prints the skip line when it is not.
-fn verilator(test: &str) -> bool {
-    if Sim::Verilator.available() {
-        return true;
-    }
-    skip(&format!(
-        "SKIP {test} under Verilator: verilator (with make, g++) not installed (apt-get install -y verilator make g++); Verilator co-simulation not run"
-    ));
-    false
-}
-
 /// Under `IGEMU_REQUIRE_HDL=1` a skip fails its test; without it, it passes.
 #[test]
 fn a_skip_fails_when_the_simulators_are_required() {
@@ -83,12 +41,6 @@ fn a_skip_fails_when_the_simulators_are_required() {
     let msg = e.downcast_ref::<String>().expect("a message");
     assert!(msg.contains(line) && msg.contains(REQUIRE), "{msg}");
     skip_or_fail(line, false);
-}
-
-/// Verilator builds, shared by all tests and kept between runs (keyed by the testbench,
-/// module and params.vh).
-fn verilator_cache() -> PathBuf {
-    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hdl-verilator")
 }
 
 /// Writes the bench and runs testbench `tb` on it under `sim`.

@@ -13,7 +13,9 @@
 // OVF: 0 wrap, 1 saturate to the limits (SAT, ERROR; SAT_SYM for unsigned), 2 saturate to
 // zero, 3 symmetric saturation of the signed accumulator (SAT_SYM: -max for the minimum
 // too, flagged); the clamp to the unsigned frame word treats 3 as 1.
-// Timing: combinational multiply/round/add, outputs registered (latency 1, one term per clock).
+// Timing: valid/ready handshake (hs_pipe.v), the multiply/round/add/clamp datapath followed
+// by LATENCY register stages (the preset's [cycles.accumulate] latency, 6; synthesis may
+// retime them into the multiplier and adders), one term per clock per instance (one lane).
 module acc_mac #(
     parameter W_BITS = 10,
     parameter I_BITS = 16,
@@ -22,16 +24,22 @@ module acc_mac #(
     parameter QUANT  = 3,
     parameter OVF    = 1,
     parameter SIGNED = 0,
-    parameter A_BITS = F_BITS
+    parameter A_BITS = F_BITS,
+    parameter LATENCY = 6
 ) (
     input  wire              clk,
+    input  wire              rst,
+    input  wire              in_valid,
+    output wire              in_ready,
+    output wire              out_valid,
+    input  wire              out_ready,
     input  wire [W_BITS-1:0] w,
     input  wire [I_BITS-1:0] i,
     input  wire [A_BITS-1:0] acc_in,
-    output reg  [A_BITS-1:0] acc_out,
-    output reg               ovf,
-    output reg  [F_BITS-1:0] clamp_out,
-    output reg               clamp_ovf
+    output wire [A_BITS-1:0] acc_out,
+    output wire              ovf,
+    output wire [F_BITS-1:0] clamp_out,
+    output wire              clamp_ovf
 );
     localparam P_BITS = W_BITS + I_BITS + 1;
     localparam LSH    = (SHIFT < 0) ? -SHIFT : 0;
@@ -89,10 +97,8 @@ module acc_mac #(
                                (OVF == 0) ? a_next[F_BITS-1:0] :
                                (OVF == 1 || OVF == 3) ? ((a_next > fmax) ? {F_BITS{1'b1}} : {F_BITS{1'b0}}) :
                                {F_BITS{1'b0}};
-    always @(posedge clk) begin
-        ovf       <= over;
-        acc_out   <= acc_next;
-        clamp_ovf <= c_over;
-        clamp_out <= c_next;
-    end
+    hs_pipe #(.W(A_BITS + F_BITS + 2), .DEPTH(LATENCY)) u_pipe (
+        .clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(in_ready),
+        .in_data({over, acc_next, c_over, c_next}), .out_valid(out_valid),
+        .out_ready(out_ready), .out_data({ovf, acc_out, clamp_ovf, clamp_out}));
 endmodule

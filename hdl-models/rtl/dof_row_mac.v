@@ -17,8 +17,11 @@
 //   sd  = sum c_t d_t (exact, as sa): after both passes the alpha is A / D,
 //   w   = sum of c_t over the in-line taps: the border renormalisation weight (Wx or Wy of
 //         alpha normalisation a = A / (n^2 Wx Wy) of dof.alpha_norm = "image").
-// Timing: tap-parallel (TAPS multipliers per plane and pass, adder tree), combinational up
-// to the output registers: latency 1 clock, one output sample per pass per clock.
+// Timing: tap-parallel (TAPS multipliers per plane and pass, adder tree): dof_mac_1d is
+// combinational; dof_row_mac takes both passes' windows with one valid/ready handshake
+// (hs_pipe.v) and carries both passes' outputs through LATENCY register stages (the preset's
+// [cycles.dof] latency, 8; synthesis may retime them into the multipliers and the adder
+// tree): one output sample per pass per clock, so one instance is the preset's two lanes.
 module dof_mac_1d #(
     parameter HALF     = 4,
     parameter C_BITS   = 13,
@@ -28,18 +31,17 @@ module dof_mac_1d #(
     parameter OUT_BITS = 32,
     parameter SA_BITS  = 17
 ) (
-    input  wire                         clk,
     input  wire [(2*HALF+1)*C_BITS-1:0] coef,
     input  wire [POS_BITS-1:0]          pos,
     input  wire [POS_BITS-1:0]          len,
     input  wire [(2*HALF+1)*X_BITS-1:0] x,
     input  wire [(2*HALF+1)*A_BITS-1:0] a,
     input  wire [(2*HALF+1)*A_BITS-1:0] d,
-    output reg  [OUT_BITS-1:0]          sx,
-    output reg                          ovf,
-    output reg  [SA_BITS-1:0]           sa,
-    output reg  [SA_BITS-1:0]           sd,
-    output reg  [C_BITS-1:0]            w
+    output wire [OUT_BITS-1:0]          sx,
+    output wire                         ovf,
+    output wire [SA_BITS-1:0]           sa,
+    output wire [SA_BITS-1:0]           sd,
+    output wire [C_BITS-1:0]            w
 );
     localparam TAPS = 2 * HALF + 1;
     // A layer's taps sum to 2^f < 2^C_BITS, so the exact sum fits X_BITS + C_BITS bits.
@@ -64,13 +66,11 @@ module dof_mac_1d #(
             end
         end
     end
-    always @(posedge clk) begin
-        ovf <= sum_x > MAX;
-        sx  <= (sum_x > MAX) ? {OUT_BITS{1'b1}} : sum_x[OUT_BITS-1:0];
-        sa  <= sum_a;
-        sd  <= sum_d;
-        w   <= sum_w;
-    end
+    assign ovf = sum_x > MAX;
+    assign sx  = (sum_x > MAX) ? {OUT_BITS{1'b1}} : sum_x[OUT_BITS-1:0];
+    assign sa  = sum_a;
+    assign sd  = sum_d;
+    assign w   = sum_w;
 endmodule
 
 module dof_row_mac #(
@@ -87,9 +87,15 @@ module dof_row_mac #(
     parameter VA_BITS    = 17,
     parameter V_OUT_BITS = 40,
     parameter V_SA_BITS  = 29,
-    parameter ROM_FILE   = "dof_rom.hex"
+    parameter ROM_FILE   = "dof_rom.hex",
+    parameter LATENCY    = 8
 ) (
     input  wire                          clk,
+    input  wire                          rst,
+    input  wire                          in_valid,
+    output wire                          in_ready,
+    output wire                          out_valid,
+    input  wire                          out_ready,
     input  wire [LAYER_BITS-1:0]         h_layer,
     input  wire [POS_BITS-1:0]           h_pos,
     input  wire [POS_BITS-1:0]           h_len,
@@ -125,12 +131,25 @@ module dof_row_mac #(
             assign v_coef[g*C_BITS +: C_BITS] = rom[v_layer*TAPS + g];
         end
     endgenerate
+    // Both passes' outputs before the pipeline.
+    localparam H_W = H_OUT_BITS + 1 + 2 * H_SA_BITS + C_BITS;
+    localparam V_W = V_OUT_BITS + 1 + 2 * V_SA_BITS + C_BITS;
+    wire [H_W-1:0] h_next;
+    wire [V_W-1:0] v_next;
     dof_mac_1d #(.HALF(HALF), .C_BITS(C_BITS), .POS_BITS(POS_BITS), .X_BITS(HX_BITS),
                  .A_BITS(HA_BITS), .OUT_BITS(H_OUT_BITS), .SA_BITS(H_SA_BITS))
-        u_h (.clk(clk), .coef(h_coef), .pos(h_pos), .len(h_len), .x(h_x), .a(h_a),
-             .d(h_d), .sx(h_sx), .ovf(h_ovf), .sa(h_sa), .sd(h_sd), .w(h_w));
+        u_h (.coef(h_coef), .pos(h_pos), .len(h_len), .x(h_x), .a(h_a), .d(h_d),
+             .sx(h_next[H_W-1 -: H_OUT_BITS]), .ovf(h_next[H_W-1-H_OUT_BITS]),
+             .sa(h_next[C_BITS+H_SA_BITS +: H_SA_BITS]), .sd(h_next[C_BITS +: H_SA_BITS]),
+             .w(h_next[C_BITS-1:0]));
     dof_mac_1d #(.HALF(HALF), .C_BITS(C_BITS), .POS_BITS(POS_BITS), .X_BITS(VX_BITS),
                  .A_BITS(VA_BITS), .OUT_BITS(V_OUT_BITS), .SA_BITS(V_SA_BITS))
-        u_v (.clk(clk), .coef(v_coef), .pos(v_pos), .len(v_len), .x(v_x), .a(v_a),
-             .d(v_d), .sx(v_sx), .ovf(v_ovf), .sa(v_sa), .sd(v_sd), .w(v_w));
+        u_v (.coef(v_coef), .pos(v_pos), .len(v_len), .x(v_x), .a(v_a), .d(v_d),
+             .sx(v_next[V_W-1 -: V_OUT_BITS]), .ovf(v_next[V_W-1-V_OUT_BITS]),
+             .sa(v_next[C_BITS+V_SA_BITS +: V_SA_BITS]), .sd(v_next[C_BITS +: V_SA_BITS]),
+             .w(v_next[C_BITS-1:0]));
+    hs_pipe #(.W(H_W + V_W), .DEPTH(LATENCY)) u_pipe (
+        .clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(in_ready),
+        .in_data({h_next, v_next}), .out_valid(out_valid), .out_ready(out_ready),
+        .out_data({h_sx, h_ovf, h_sa, h_sd, h_w, v_sx, v_ovf, v_sa, v_sd, v_w}));
 endmodule

@@ -3,7 +3,8 @@
 // interpolating) entries of TD bits written by the Rust model; entry j holds sb(j 2^SHIFT).
 // Without interpolation the address is round(d / 2^SHIFT); with it, linear
 // interpolation between entries j and j+1 (rounded, ties up). Addresses >= N give 0.
-// Timing: combinational datapath, output registered (latency 1, one add per clock).
+// Timing: valid/ready handshake (hs_pipe.v), the datapath followed by LATENCY register
+// stages (the preset's [cycles.logdomain] latency, 2), one add per clock.
 module log_adder #(
     parameter FB        = 8,
     parameter TD        = 8,
@@ -12,12 +13,18 @@ module log_adder #(
     parameter SHIFT     = 0,
     parameter INTERP    = 0,
     parameter MAX       = 255,
-    parameter ROM_FILE  = "log_rom.hex"
+    parameter ROM_FILE  = "log_rom.hex",
+    parameter LATENCY   = 2
 ) (
     input  wire          clk,
+    input  wire          rst,
+    input  wire          in_valid,
+    output wire          in_ready,
+    output wire          out_valid,
+    input  wire          out_ready,
     input  wire [FB-1:0] a,
     input  wire [FB-1:0] b,
-    output reg  [FB-1:0] s
+    output wire [FB-1:0] s
 );
     localparam N = (1 << ADDR_BITS);
     localparam V_BITS = FB + TF + TD + 2;
@@ -51,6 +58,8 @@ module log_adder #(
     end
     wire [V_BITS-1:0] v = ({{(V_BITS-FB){1'b0}}, m} << TF) + sbv;
     wire [V_BITS-1:0] r = (TF == 0) ? v : ((v + (1 << (TF - 1))) >> TF);
-    always @(posedge clk)
-        s <= (a == 0) ? b : (b == 0) ? a : (r > MAX) ? MAX : r[FB-1:0];
+    wire [FB-1:0] s_next = (a == 0) ? b : (b == 0) ? a : (r > MAX) ? MAX : r[FB-1:0];
+    hs_pipe #(.W(FB), .DEPTH(LATENCY)) u_pipe (
+        .clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(in_ready), .in_data(s_next),
+        .out_valid(out_valid), .out_ready(out_ready), .out_data(s));
 endmodule

@@ -1,32 +1,27 @@
-// Self-checking testbench of gamma_lut: fields per vector: acc, expected dac.
+// Self-checking testbench of gamma_lut: fields per vector: acc, expected dac. The vectors
+// stream through the handshake (hs_tb.vh).
 `timescale 1ns/1ps
 `include "params.vh"
 module tb_gamma_lut;
-    reg clk = 0;
-    reg [63:0] mem [0:`N_VECTORS*`N_FIELDS-1];
+    `include "hs_tb.vh"
     reg [63:0] e;
     reg [`P_ACC_BITS-1:0] acc;
     wire [`P_DAC_BITS-1:0] dac;
-    integer k, errors, first;
     gamma_lut #(.ACC_BITS(`P_ACC_BITS), .FRAC_BITS(`P_FRAC_BITS), .DAC_BITS(`P_DAC_BITS),
-                .ROM_FILE("gamma_rom.hex")) dut (.clk(clk), .acc(acc), .dac(dac));
-    initial begin
-        $readmemh("vectors.hex", mem);
-        errors = 0;
-        first = -1;
-        for (k = 0; k < `N_VECTORS; k = k + 1) begin
-            acc = mem[k*`N_FIELDS];
-            #1 clk = 1;
-            #1 clk = 0;
+                .ROM_FILE("gamma_rom.hex"))
+        dut (.clk(clk), .rst(rst), .in_valid(in_valid), .in_ready(in_ready), .acc(acc),
+             .out_valid(out_valid), .out_ready(out_ready), .dac(dac));
+    task drive(input integer k);
+        acc = mem[k*`N_FIELDS];
+    endtask
+    task check(input integer k, output reg bad_k);
+        begin
             e = mem[k*`N_FIELDS+1];
-            if (dac !== e[`P_DAC_BITS-1:0] || e >> `P_DAC_BITS != 0) begin
-                if (errors == 0) first = k;
-                errors = errors + 1;
-            end
+            bad_k = dac !== e[`P_DAC_BITS-1:0] || e >> `P_DAC_BITS != 0;
         end
-        if (errors == 0) $display("TESTBENCH OK %0d vectors", `N_VECTORS);
-        else $display("TESTBENCH FAILED: %0d of %0d vectors differ, first vector %0d (acc=%0h expected dac=%0h)",
-                      errors, `N_VECTORS, first, mem[first*`N_FIELDS], mem[first*`N_FIELDS+1]);
-        $finish;
-    end
+    endtask
+    task fail_line;
+        $display("TESTBENCH FAILED: %0d of %0d vectors differ, first vector %0d (acc=%0h expected dac=%0h)",
+                 errors, total, first, mem[first*`N_FIELDS], mem[first*`N_FIELDS+1]);
+    endtask
 endmodule

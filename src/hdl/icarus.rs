@@ -3,7 +3,7 @@
 //! run of a built simulation and its verdict ([`SimRun`]).
 
 use super::bench::{Verdict, parse_verdict};
-use super::model_file;
+use super::models::sim_files;
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -29,6 +29,9 @@ pub struct SimRun {
     pub compile_s: f64,
     /// vvp simulation time, including reading the vector file (seconds).
     pub sim_s: f64,
+    /// The simulation's standard output (the verdict and, from the vector testbenches, the
+    /// `TIMING` line: [`super::timing`]).
+    pub stdout: String,
 }
 
 /// Compiles and runs the testbench of `module` on the bench in `dir` under Icarus Verilog;
@@ -44,17 +47,28 @@ pub fn run_icarus_timed(module: &str, dir: &Path) -> std::result::Result<SimRun,
 
 /// [`run_icarus_timed`] of testbench `tb` (`hdl-models/tb/<tb>.v`) of `module`.
 pub fn run_icarus_tb(tb: &str, module: &str, dir: &Path) -> std::result::Result<SimRun, String> {
-    let (tb_v, rtl_v) = (model_file("tb", tb)?, model_file("rtl", module)?);
+    run_icarus_args(tb, module, dir, &[])
+}
+
+/// [`run_icarus_tb`] with plusargs for the simulation (`+stall`, `+tokens`: `hs_tb.vh`).
+pub fn run_icarus_args(
+    tb: &str,
+    module: &str,
+    dir: &Path,
+    plusargs: &[&str],
+) -> std::result::Result<SimRun, String> {
+    let f = sim_files(tb, module)?;
     let sim = dir.join("sim.vvp");
     let t = Instant::now();
     let c = Command::new("iverilog")
         .arg("-g2005")
         .arg("-I")
         .arg(dir)
+        .arg("-I")
+        .arg(&f.include_dir)
         .arg("-o")
         .arg(&sim)
-        .arg(tb_v)
-        .arg(rtl_v)
+        .args(&f.sources)
         .output()
         .map_err(|e| format!("iverilog: {e}"))?;
     if !c.status.success() {
@@ -67,7 +81,7 @@ pub fn run_icarus_tb(tb: &str, module: &str, dir: &Path) -> std::result::Result<
     let mut vvp = Command::new("vvp");
     // vvp runs in the bench directory (the ROM files are read from there): give it the
     // compiled simulation by a name relative to that directory.
-    vvp.arg("-n").arg("sim.vvp").current_dir(dir);
+    vvp.arg("-n").arg("sim.vvp").args(plusargs).current_dir(dir);
     run_simulation(vvp, "vvp", compile_s)
 }
 
@@ -91,5 +105,6 @@ pub(crate) fn run_simulation(
         verdict,
         compile_s,
         sim_s,
+        stdout: out,
     })
 }

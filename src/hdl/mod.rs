@@ -12,15 +12,19 @@
 //! Files: [`bench`](mod@bench) (the bench, its files, the verdict), [`icarus`] (Icarus runs, shared
 //! simulation plumbing), [`models`] (the Verilog embedded in the binary, written out where a
 //! simulator reads it, or a `--hdl-dir` copy), `vectors/` (one vector builder per stage), [`exhaustive`] (the log
-//! adder's full pair space), [`verilator`] and [`synth`] (yosys).
+//! adder's full pair space), [`verilator`], [`synth`] (yosys) [`timing`] (latency and ii
+//! measured from the RTL against `[cycles.*]`) and [`correlate`] (the RTL on a run's token
+//! stream against the cycle model).
 
 use crate::stage_id::StageId;
 
 pub mod bench;
+pub mod correlate;
 pub mod exhaustive;
 pub mod icarus;
 pub mod models;
 pub mod synth;
+pub mod timing;
 mod vectors;
 pub mod verilator;
 

@@ -32,9 +32,14 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../hdl-models/rtl/gamma_lut.v"),
     ),
     (
+        "rtl/hs_pipe.v",
+        include_str!("../../hdl-models/rtl/hs_pipe.v"),
+    ),
+    (
         "rtl/log_adder.v",
         include_str!("../../hdl-models/rtl/log_adder.v"),
     ),
+    ("tb/hs_tb.vh", include_str!("../../hdl-models/tb/hs_tb.vh")),
     (
         "tb/tb_acc_mac.v",
         include_str!("../../hdl-models/tb/tb_acc_mac.v"),
@@ -115,6 +120,45 @@ pub fn model_file(sub: &str, name: &str) -> Result<PathBuf, String> {
     } else {
         Err(format!("{}: no such HDL model file", p.display()))
     }
+}
+
+/// The pipeline shell every module instantiates (`rtl/hs_pipe.v`).
+pub const PIPE: &str = "hs_pipe";
+/// The handshake driver every vector testbench includes (`tb/hs_tb.vh`).
+pub const DRIVER: &str = "hs_tb.vh";
+
+/// What a simulator compiles for testbench `tb` of `module`: the sources (testbench,
+/// module, pipeline shell), the folder searched for `` `include``s besides the bench's, and
+/// every file read (sources and the handshake driver) for a build's hash.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SimFiles {
+    /// Testbench, module and pipeline shell, in that order.
+    pub sources: Vec<PathBuf>,
+    /// The testbench folder (`tb/`, holding the handshake driver).
+    pub include_dir: PathBuf,
+    /// The sources and the handshake driver.
+    pub read: Vec<PathBuf>,
+}
+
+/// The files of testbench `tb` of `module` ([`SimFiles`]), checked to exist.
+pub fn sim_files(tb: &str, module: &str) -> Result<SimFiles, String> {
+    let sources = vec![
+        model_file("tb", tb)?,
+        model_file("rtl", module)?,
+        model_file("rtl", PIPE)?,
+    ];
+    let include_dir = models_dir()?.join("tb");
+    let driver = include_dir.join(DRIVER);
+    if !driver.is_file() {
+        return Err(format!("{}: no such HDL model file", driver.display()));
+    }
+    let mut read = sources.clone();
+    read.push(driver);
+    Ok(SimFiles {
+        sources,
+        include_dir,
+        read,
+    })
 }
 
 /// Writes the embedded files under `cache/hdl-models-<hash>/` (those missing or different)

@@ -58,15 +58,19 @@ pub fn parse_stat(module: &str, text: &str) -> Option<SynthCells> {
 /// Synthesises the bench's module at its parameters (ROM files from the bench) under
 /// `cache` (one directory per input hash); reuses a cached result.
 pub fn synth(b: &Bench, cache: &Path) -> Result<SynthCells> {
-    let rtl = model_file("rtl", b.module).map_err(|m| Error::Io {
-        path: "HDL models".into(),
-        source: std::io::Error::other(m),
-    })?;
+    let models = |name: &str| {
+        model_file("rtl", name).map_err(|m| Error::Io {
+            path: "HDL models".into(),
+            source: std::io::Error::other(m),
+        })
+    };
+    let (rtl, pipe) = (models(b.module)?, models(super::models::PIPE)?);
     let io = |p: &Path, e: std::io::Error| Error::Io {
         path: p.display().to_string(),
         source: e,
     };
-    let src = std::fs::read(&rtl).map_err(|e| io(&rtl, e))?;
+    let mut src = std::fs::read(&rtl).map_err(|e| io(&rtl, e))?;
+    src.extend(std::fs::read(&pipe).map_err(|e| io(&pipe, e))?);
     let params: String = b.params.iter().map(|(k, v)| format!("{k}={v};")).collect();
     let roms: String = b.roms.iter().map(|(n, r)| format!("{n}:{r:?};")).collect();
     let h = crate::fnv::fnv1a_parts(&[&src, params.as_bytes(), roms.as_bytes()]);
@@ -88,8 +92,9 @@ pub fn synth(b: &Bench, cache: &Path) -> Result<SynthCells> {
         .map(|(k, v)| format!(" -set {k} {v}"))
         .collect();
     let script = format!(
-        "read_verilog -defer {}; chparam{sets} {m}; synth -top {m}; tee -q -o stat.txt stat",
+        "read_verilog -defer {} {}; chparam{sets} {m}; synth -flatten -top {m}; tee -q -o stat.txt stat",
         rtl.display(),
+        pipe.display(),
         m = b.module
     );
     let out = Command::new("yosys")

@@ -9,7 +9,8 @@
 //! simulator runs in the bench directory (it reads `vectors.hex` and the ROM files there)
 //! and prints the same verdict line as under Icarus ([`super::parse_verdict`]).
 
-use super::{SimRun, Verdict, model_file};
+use super::models::sim_files;
+use super::{SimRun, Verdict};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -63,9 +64,21 @@ impl Sim {
         dir: &Path,
         cache: &Path,
     ) -> std::result::Result<SimRun, String> {
+        self.run_args(tb, module, dir, cache, &[])
+    }
+
+    /// [`Sim::run`] with plusargs for the simulation (`+stall`, `+tokens`: `hs_tb.vh`).
+    pub fn run_args(
+        self,
+        tb: &str,
+        module: &str,
+        dir: &Path,
+        cache: &Path,
+        plusargs: &[&str],
+    ) -> std::result::Result<SimRun, String> {
         match self {
-            Sim::Icarus => super::icarus::run_icarus_tb(tb, module, dir),
-            Sim::Verilator => run_verilator_tb(tb, module, dir, cache),
+            Sim::Icarus => super::icarus::run_icarus_args(tb, module, dir, plusargs),
+            Sim::Verilator => run_verilator_args(tb, module, dir, cache, plusargs),
         }
     }
 }
@@ -107,17 +120,18 @@ pub fn build(
     dir: &Path,
     cache: &Path,
 ) -> std::result::Result<Build, String> {
-    let (tb_v, rtl_v) = (model_file("tb", tb)?, model_file("rtl", module)?);
+    let f = sim_files(tb, module)?;
     let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
-    let (tb_src, rtl_src, params) = (read(&tb_v)?, read(&rtl_v)?, read(&dir.join("params.vh"))?);
+    let mut texts = f
+        .read
+        .iter()
+        .map(|p| read(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    texts.push(read(&dir.join("params.vh"))?);
     let ver = version();
-    let h = crate::fnv::fnv1a_parts(&[
-        &tb_src,
-        &rtl_src,
-        &params,
-        FLAGS.join(" ").as_bytes(),
-        ver.as_bytes(),
-    ]);
+    texts.push(FLAGS.join(" ").into_bytes());
+    texts.push(ver.clone().into_bytes());
+    let h = crate::fnv::fnv1a_parts(&texts.iter().map(|t| t.as_slice()).collect::<Vec<_>>());
     let name = format!("{tb}-{h:016x}");
     let exe = format!("V{tb}");
     let done = cache.join(&name);
@@ -146,14 +160,14 @@ pub fn build(
     let out = Command::new("verilator")
         .args(FLAGS)
         .arg("-I".to_string() + &dir.display().to_string())
+        .arg("-I".to_string() + &f.include_dir.display().to_string())
         .arg("--top-module")
         .arg(tb)
         .arg("--Mdir")
         .arg(&tmp)
         .arg("-o")
         .arg(&exe)
-        .arg(&tb_v)
-        .arg(&rtl_v)
+        .args(&f.sources)
         .output()
         .map_err(|e| format!("verilator: {e}"))?;
     if !out.status.success() {
@@ -232,11 +246,22 @@ pub fn run_verilator_tb(
     dir: &Path,
     cache: &Path,
 ) -> std::result::Result<SimRun, String> {
+    run_verilator_args(tb, module, dir, cache, &[])
+}
+
+/// [`run_verilator_tb`] with plusargs for the simulation (`+stall`, `+tokens`: `hs_tb.vh`).
+pub fn run_verilator_args(
+    tb: &str,
+    module: &str,
+    dir: &Path,
+    cache: &Path,
+    plusargs: &[&str],
+) -> std::result::Result<SimRun, String> {
     let t = Instant::now();
     let b = build(tb, module, dir, cache)?;
     let compile_s = t.elapsed().as_secs_f64();
     let mut sim = Command::new(&b.binary);
-    sim.current_dir(dir);
+    sim.args(plusargs).current_dir(dir);
     super::icarus::run_simulation(
         sim,
         &format!("Verilator ({})", b.binary.display()),

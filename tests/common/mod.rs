@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod sim;
+pub mod sims;
 
 use igemu::config::HwConfig;
 use igemu::files::TomlFile;

@@ -25,6 +25,11 @@ pub struct CyclesArgs {
     /// Print the cycle report as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Use the latency and ii measured from the HDL models under Verilator (igemu hdl timing) for the stages that have one.
+    #[arg(long)]
+    pub timing_from_rtl: bool,
+    #[command(flatten)]
+    pub dirs: crate::args::HdlDirs,
 }
 
 /// Runs `igemu cycles`; returns the exit code.
@@ -39,6 +44,13 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
         igemu::config::check_clock(mhz).map_err(|m| arg_error("--clock-mhz", m))?;
         hw.cycles.clock_mhz = mhz;
     }
+    let rtl = if a.timing_from_rtl {
+        let (c, line) = super::hdl_timing::rtl_cycles(&a.s, &a.dirs, &hw)?;
+        hw.cycles = c;
+        Some(line)
+    } else {
+        None
+    };
     let r = pipeline::render(&scene, &hw, a.s.opts(RunOptions::FAST))?;
     let mut c = r.report.cycles.clone();
     if let Some(path) = &a.vcd {
@@ -83,6 +95,9 @@ pub fn run(a: CyclesArgs) -> Result<ExitCode, Error> {
             r.report.scene.height,
             r.report.hardware.name
         );
+        if let Some(l) = &rtl {
+            outln!("{l}");
+        }
         print_cycles(&c)?;
         if let Some(p) = &a.vcd {
             outln!("wrote {p}");

@@ -20,6 +20,8 @@ use std::process::ExitCode;
 pub enum HdlCmd {
     /// Write a stage's vectors (scene taps, exhaustive, random), ROM files and params.vh to a directory.
     Vectors(HdlVectorsArgs),
+    /// Measure each HDL model's latency and ii under Verilator (full rate, injected stalls) against the hardware's [cycles.*]; exit 1 where they disagree.
+    Timing(super::hdl_timing::HdlTimingArgs),
 }
 
 #[derive(Args)]
@@ -64,6 +66,7 @@ pub enum ChannelArg {
 pub fn run(c: HdlCmd) -> Result<ExitCode, Error> {
     match c {
         HdlCmd::Vectors(a) => vectors(a),
+        HdlCmd::Timing(a) => super::hdl_timing::run(a),
     }
 }
 

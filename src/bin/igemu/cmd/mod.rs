@@ -8,6 +8,7 @@ pub mod dof;
 pub mod filters;
 pub mod flicker;
 pub mod hdl;
+pub mod hdl_timing;
 pub mod merge;
 pub mod ranges;
 pub mod render;
