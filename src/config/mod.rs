@@ -401,10 +401,13 @@ impl HwConfig {
         self.dither.validate(acc.int_bits, self.gamma.dac_bits)?;
         self.dof.validate()?;
         self.coding.validate()?;
-        if self.coding.kind == CodingKind::LogAdd && self.dither.kind != DitherKind::None {
+        if self.coding.kind == CodingKind::LogAdd
+            && self.dither.kind != DitherKind::None
+            && self.dither.placement == Placement::BeforeLut
+        {
             return err(
-                "dither.kind",
-                "dithering is modelled after the linear gamma LUT only; with coding.kind = \"log-add\" use kind = \"none\" (or log-potentiate)".into(),
+                "dither.placement",
+                "a log-add frame is dithered after its eq. 15 gamma LUT only (the LUT output's extra fraction bits); before the LUT a dither would drop bits of the log code: use placement = \"after_lut\"".into(),
             );
         }
         Ok(())

@@ -1,7 +1,7 @@
 //! The gamma stage through the contract: the LUT the plan needs (plain; with `f` extra
 //! output fraction bits when a dither follows; with a reduced address when the dither runs
-//! before it; the eq. 15 LUT of a log-coded frame), its float reference and its
-//! stage-local comparison.
+//! before it; the eq. 15 LUT of a log-coded frame, also with `f` extra output fraction bits
+//! when a dither follows), its float reference and its stage-local comparison.
 
 use super::{GammaLut, GammaSpec, apply_powers, lookup, powers, powers_key};
 use super::{extended_lut, reduced_lut};
@@ -9,7 +9,7 @@ use crate::config::HwConfig;
 use crate::error::Result;
 use crate::fnv::Fnv;
 use crate::scene::Scene;
-use crate::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut};
+use crate::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut, log_gamma_lut_extended};
 use crate::stage::taps::{FrameCoding, PixelTap, PixelTapF, Taps};
 use crate::stage::{
     Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, Stage, StageId, Tokens, Unit, memo,
@@ -28,6 +28,8 @@ pub enum Lut {
     Reduced(Arc<GammaLut>, u32),
     /// Log frame code to DAC code (eq. 15).
     Log(Arc<Vec<u16>>, Arc<LogAdder>),
+    /// Log frame code to DAC code with `f` fraction bits (eq. 15, `UQd.f`): a dither follows.
+    LogExtended(Arc<Vec<u32>>, Arc<LogAdder>, u32),
 }
 
 /// The gamma stage.
@@ -107,6 +109,16 @@ impl Stage for Gamma {
             let frame = taps.fixed.frame();
             let acc = &frame.frame.acc;
             match &frame.coding {
+                FrameCoding::Log(add) if dither_after => {
+                    let f = hw.dither.frac_bits;
+                    let lut = log_gamma_lut_extended(add, &spec, f);
+                    let mut codes = cx.pool.scratch(acc.len(), 0u32);
+                    lookup(&lut, acc, 0, &mut codes);
+                    facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
+                    facts.note("log_input_eq15", true);
+                    facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
+                    (Lut::LogExtended(Arc::new(lut), add.clone(), f), codes, f)
+                }
                 FrameCoding::Log(add) => {
                     let lut = log_gamma_lut(add, &spec);
                     let mut codes = cx.pool.scratch(acc.len(), 0u32);
@@ -145,7 +157,7 @@ impl Stage for Gamma {
         };
         let entries = match &lut {
             Lut::Plain(l) | Lut::Reduced(l, _) => l.table.len(),
-            Lut::Extended(t, _) => t.len(),
+            Lut::Extended(t, _) | Lut::LogExtended(t, _, _) => t.len(),
             Lut::Log(t, _) => t.len(),
         };
         facts.work = vec![
@@ -182,7 +194,7 @@ impl Stage for Gamma {
                 let p = memo(cx.memo, powers_key(cx.input_key, &spec), || {
                     powers(frame_ref, hw, &spec)
                 });
-                if let Lut::Extended(..) = lut {
+                if let Lut::Extended(..) | Lut::LogExtended(..) = lut {
                     PixelTapF::Values(p.par_iter().map(|&v| spec.scale(v)).collect())
                 } else {
                     let mut dac = vec![0u16; p.len()];
@@ -223,6 +235,12 @@ impl Stage for Gamma {
             Lut::Log(_, add) => {
                 for (&c, &d) in input.fixed.frame().frame.acc.iter().zip(codes) {
                     e.add(d as f64, spec.ideal(log_gamma_linear(add, c as i64)));
+                }
+            }
+            Lut::LogExtended(_, add, f) => {
+                let scale = (1u64 << f) as f64;
+                for (&c, &v) in input.fixed.frame().frame.acc.iter().zip(codes) {
+                    e.add(v as f64, spec.ideal(log_gamma_linear(add, c as i64)) * scale);
                 }
             }
             Lut::Extended(_, f) => {
@@ -270,6 +288,11 @@ impl Stage for Gamma {
                 vec![Unit::adder("LUT address", 1, add.frame_bits())],
                 vec![],
             ),
+            Lut::LogExtended(t, add, f) => Cost::new(
+                vec![Memory::rom(ROM_LOG_EXTENDED, t.len() as u64, dac_bits + f)],
+                vec![Unit::adder("LUT address", 1, add.frame_bits())],
+                vec![],
+            ),
         }
     }
 
@@ -280,6 +303,7 @@ impl Stage for Gamma {
             Lut::Reduced(l, _) => MemImage::table(ROM_REDUCED, dac_bits, Arc::new(l.table.clone())),
             Lut::Extended(t, f) => MemImage::table(ROM_EXTENDED, dac_bits + f, t.clone()),
             Lut::Log(t, _) => MemImage::table(ROM_LOG, dac_bits, t.clone()),
+            Lut::LogExtended(t, _, f) => MemImage::table(ROM_LOG_EXTENDED, dac_bits + f, t.clone()),
         }]
     }
 }
@@ -292,3 +316,5 @@ pub const ROM_EXTENDED: &str = "gamma ROM (extended output)";
 pub const ROM_REDUCED: &str = "gamma ROM (reduced address)";
 /// The eq. 15 gamma ROM of a log-coded frame.
 pub const ROM_LOG: &str = "gamma ROM (eq. 15, log input)";
+/// The eq. 15 gamma ROM with extra output fraction bits (a dither follows).
+pub const ROM_LOG_EXTENDED: &str = "gamma ROM (eq. 15, log input, extended output)";

@@ -63,6 +63,6 @@ pub use adder::{LOG_FRAME_MEMORY, LOG_WEIGHT_ROM, LogAdder, SB_TABLE, ZERO};
 pub use code::{
     LogCode, LogEncoder, POTENTIATION_LUT, PotentiationLut, THRESHOLD_ROM, check_contrast,
 };
-pub use lut::{log_gamma_linear, log_gamma_lut};
+pub use lut::{log_gamma_linear, log_gamma_lut, log_gamma_lut_extended};
 pub use stage::{Logdomain, log_code};
 pub use sums::{LogWork, accumulate_pixel, accumulate_pixel_f64, add_term, local_add};
