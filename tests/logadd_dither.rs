@@ -8,8 +8,8 @@ mod common;
 use igemu::config::{DitherKind, HwConfig, Placement};
 use igemu::pipeline::{Render, render};
 use igemu::scene::Scene;
-use igemu::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut, log_gamma_lut_extended};
 use igemu::stage::gamma::GammaSpec;
+use igemu::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut, log_gamma_lut_extended};
 use igemu::stage::taps::FrameCoding;
 use igemu::stage::{RunOptions, StageId};
 
@@ -42,7 +42,11 @@ fn log8_logadd_with_floyd_steinberg_times_every_stage() {
     for scene in ["default", "default-pinhole"] {
         let r = run(scene, &h);
         let c = &r.report.cycles;
-        assert!(c.plan.unmodelled.is_empty(), "{scene}: {:?}", c.plan.unmodelled);
+        assert!(
+            c.plan.unmodelled.is_empty(),
+            "{scene}: {:?}",
+            c.plan.unmodelled
+        );
         for name in &r.report.plan.stages {
             let line = c.stages.iter().find(|s| &s.name == name);
             let line = line.unwrap_or_else(|| panic!("{scene}: no cycles for {name}"));
@@ -80,7 +84,11 @@ fn the_extended_log_lut_is_the_eq15_curve_to_half_an_lsb() {
         .expect("the extended eq. 15 ROM");
     assert_eq!(rom.width, 8 + h.dither.frac_bits, "{rom:?}");
 
-    let frame = r.taps(StageId::Accumulate).expect("accumulate ran").fixed.frame();
+    let frame = r
+        .taps(StageId::Accumulate)
+        .expect("accumulate ran")
+        .fixed
+        .frame();
     let FrameCoding::Log(add) = &frame.coding else {
         panic!("a log-add frame is log-coded")
     };
@@ -96,7 +104,10 @@ fn the_extended_log_lut_is_the_eq15_curve_to_half_an_lsb() {
     assert!(ext.windows(2).all(|w| w[0] <= w[1]));
     for (a, &e) in ext.iter().enumerate() {
         let ideal = spec.ideal(log_gamma_linear(add, a as i64)) * (1u64 << f) as f64;
-        assert!((e as f64 - ideal).abs() <= 0.5 + 1e-9, "code {a}: {e} vs {ideal}");
+        assert!(
+            (e as f64 - ideal).abs() <= 0.5 + 1e-9,
+            "code {a}: {e} vs {ideal}"
+        );
     }
 }
 
@@ -150,15 +161,25 @@ fn before_lut_is_refused_and_after_lut_renders_from_the_command_line() {
     );
     let (code, _, err) = common::igemu(&["render", "default-pinhole", "--hw", &bad]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("before.toml") && err.contains("dither.placement"), "{err}");
+    assert!(
+        err.contains("before.toml") && err.contains("dither.placement"),
+        "{err}"
+    );
 
     let good = write(
         "fs.toml",
         "preset = \"log8-logadd\"\n[dither]\nkind = \"floyd_steinberg\"\n",
     );
     let png = dir.join("out.png").to_string_lossy().into_owned();
-    let (code, out, err) =
-        common::igemu(&["render", "default-pinhole", "--hw", &good, "-o", &png, "--json"]);
+    let (code, out, err) = common::igemu(&[
+        "render",
+        "default-pinhole",
+        "--hw",
+        &good,
+        "-o",
+        &png,
+        "--json",
+    ]);
     assert_eq!(code, 0, "{err}");
     let j: serde_json::Value = serde_json::from_str(&out).expect("JSON report");
     assert_eq!(j["cycles"]["plan"]["unmodelled"], serde_json::json!([]));
@@ -171,6 +192,9 @@ fn before_lut_is_refused_and_after_lut_renders_from_the_command_line() {
     for s in j["plan"]["stages"].as_array().unwrap() {
         assert!(timed.contains(&s.as_str().unwrap()), "{s} in {timed:?}");
     }
-    assert!(timed.contains(&"logdomain") && timed.contains(&"dither"), "{timed:?}");
+    assert!(
+        timed.contains(&"logdomain") && timed.contains(&"dither"),
+        "{timed:?}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -240,7 +240,10 @@ impl Stage for Gamma {
             Lut::LogExtended(_, add, f) => {
                 let scale = (1u64 << f) as f64;
                 for (&c, &v) in input.fixed.frame().frame.acc.iter().zip(codes) {
-                    e.add(v as f64, spec.ideal(log_gamma_linear(add, c as i64)) * scale);
+                    e.add(
+                        v as f64,
+                        spec.ideal(log_gamma_linear(add, c as i64)) * scale,
+                    );
                 }
             }
             Lut::Extended(_, f) => {
