@@ -232,20 +232,26 @@ pub fn run(
         );
         return Err(scene.error("sequence.frames", msg).into());
     }
-    // The small moving objects: small in every frame run.
-    let frames: Vec<Scene> = o
-        .frames
-        .clone()
-        .map(|f| scene.frame(f))
-        .collect::<std::result::Result<_, _>>()?;
-    let small: Vec<usize> = seq
-        .moving_objects()
-        .into_iter()
-        .filter(|&k| frames.iter().all(|s| small_window(s, k).is_some()))
+    // The small moving objects (small in every frame run) and their windows, from one pass
+    // over the frames' scenes; each frame's scene is made again when it runs, so the
+    // sequence never holds more than one.
+    let moving = seq.moving_objects();
+    let mut windows: Vec<Vec<Option<Window>>> = Vec::with_capacity(o.frames.len());
+    let mut camera_moves = false;
+    let mut camera0 = None;
+    for f in o.frames.clone() {
+        let fs = scene.frame(f)?;
+        windows.push(moving.iter().map(|&k| small_window(&fs, k)).collect());
+        let c0 = camera0.get_or_insert_with(|| fs.camera.clone());
+        camera_moves |= fs.camera != *c0;
+    }
+    let small: Vec<usize> = (0..moving.len())
+        .filter(|&j| windows.iter().all(|w| w[j].is_some()))
         .collect();
     let kinds = small
         .iter()
-        .map(|&k| {
+        .map(|&j| {
+            let k = moving[j];
             let v = serde_json::to_value(&scene.objects[k]).unwrap_or_default();
             (k, v["kind"].as_str().unwrap_or("object").to_string())
         })
@@ -256,49 +262,44 @@ pub fn run(
     let cache = o.reuse.then(Cache::new);
     let emulator = fast::Emulator::new();
     let period_ms = 1e3 / seq.rate_hz;
-    let mut records = Vec::with_capacity(frames.len());
+    let mut records = Vec::with_capacity(windows.len());
     let t_all = Instant::now();
-    for (f, fs) in o.frames.clone().zip(&frames) {
-        let windows: Vec<Window> = small
-            .iter()
-            .map(|&k| small_window(fs, k).expect("small in every frame"))
-            .collect();
+    for (f, win) in o.frames.clone().zip(&windows) {
+        let fs = scene.frame(f)?;
+        let win: Vec<Window> = small.iter().filter_map(|&j| win[j]).collect();
         let (h0, m0) = cache.as_ref().map_or((0, 0), Cache::stats);
         let t = Instant::now();
-        let (cycles, codes, reference, ideal, errors) = if o.reference {
-            let r = pipeline::render_with(fs, hw, RunOptions::FAST, cache.as_ref())?;
-            let ideal = if temporal_dither {
-                match r.taps(StageId::Gamma).map(|t| t.float.pixels()) {
-                    Some(PixelTapF::Values(v)) => Some(v.clone()),
-                    _ => None,
-                }
-            } else {
-                None
+        // The frame's codes are handed on borrowed: the fixed-only path's planes go back to
+        // the emulator's pool afterwards.
+        let mut consume = |fixed: &[u16], reference: Option<&[u16]>, ideal: Option<&[f64]>| {
+            temporal.add(f, fixed, reference, &win, ideal);
+            on_frame(&FrameImages {
+                frame: f,
+                fixed,
+                reference,
+            })
+        };
+        let (cycles, errors) = if o.reference {
+            let r = pipeline::render_with(&fs, hw, RunOptions::FAST, cache.as_ref())?;
+            let ideal = match r.taps(StageId::Gamma).map(|t| t.float.pixels()) {
+                Some(PixelTapF::Values(v)) if temporal_dither => Some(v.as_slice()),
+                _ => None,
             };
+            consume(&r.dac, Some(&r.dac_ref), ideal)?;
             let c = &r.report.end_to_end;
             let errors = (
                 c.codes.identical_fraction,
                 c.codes.max_abs_diff,
                 c.weber.max,
             );
-            (
-                r.report.cycles.clone(),
-                r.dac,
-                Some(r.dac_ref),
-                ideal,
-                Some(errors),
-            )
+            (r.report.cycles.clone(), Some(errors))
         } else {
-            let e = emulator.emulate(fs, hw, RunOptions::FIXED_ONLY, cache.as_ref())?;
-            let out = (
-                e.report.cycles.clone(),
-                e.channels[0].clone(),
-                None,
-                None,
-                None,
-            );
+            let e = emulator.emulate(&fs, hw, RunOptions::FIXED_ONLY, cache.as_ref())?;
+            let done = consume(&e.channels[0], None, None);
+            let cycles = e.report.cycles.clone();
             emulator.recycle(e);
-            out
+            done?;
+            (cycles, None)
         };
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
         let (h1, m1) = cache.as_ref().map_or((0, 0), Cache::stats);
@@ -308,12 +309,6 @@ pub fn run(
         } else {
             (0, stages)
         };
-        temporal.add(f, &codes, reference.as_deref(), &windows, ideal.as_deref());
-        on_frame(&FrameImages {
-            frame: f,
-            fixed: &codes,
-            reference: reference.as_deref(),
-        })?;
         let th = &cycles.throughput;
         records.push(FrameRecord {
             frame: f,
@@ -356,10 +351,7 @@ pub fn run(
     };
     let reuse = ReuseReport {
         enabled: o.reuse,
-        camera_moves: !seq.camera.is_empty() && {
-            let c0 = &frames[0].camera;
-            frames.iter().any(|s| s.camera != *c0)
-        },
+        camera_moves,
         frames_fully_reused: records
             .iter()
             .skip(1)

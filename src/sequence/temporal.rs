@@ -277,7 +277,17 @@ impl Temporal {
             }
             d.frames += 1;
         }
-        self.prev = Some((fixed.to_vec(), reference.map(<[u16]>::to_vec)));
+        // The previous frame's planes are kept in the same buffers from frame to frame.
+        let prev = self.prev.get_or_insert_with(|| (Vec::new(), None));
+        prev.0.clear();
+        prev.0.extend_from_slice(fixed);
+        match (reference, &mut prev.1) {
+            (Some(r), Some(p)) => {
+                p.clear();
+                p.extend_from_slice(r);
+            }
+            (r, p) => *p = r.map(<[u16]>::to_vec),
+        }
     }
 
     /// The report of the frames added.
