@@ -12,6 +12,7 @@
 
 pub mod temporal;
 
+use crate::colour::ColourDisplay;
 use crate::compare::DisplayModel;
 use crate::config::HwConfig;
 use crate::error::Result;
@@ -49,7 +50,8 @@ pub struct FrameRecord {
     pub bottleneck: String,
     /// Whether the frame takes longer than the sequence's period.
     pub misses_period: bool,
-    /// Fraction of DAC codes identical to the reference (with a reference).
+    /// Fraction of DAC codes identical to the reference (with a reference; of all three
+    /// channels' codes for colour, as are the next two figures).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub identical_fraction: Option<f64>,
     /// Largest |fixed - reference| DAC code.
@@ -58,6 +60,12 @@ pub struct FrameRecord {
     /// Largest luminance difference in Weber units.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub weber_max: Option<f64>,
+    /// A colour frame: mean CIEDE2000 of the fixed against the reference image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delta_e_mean: Option<f64>,
+    /// A colour frame: largest CIEDE2000.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delta_e_max: Option<f64>,
     /// Stages whose outcome came from an earlier frame.
     pub reused_stages: u64,
     /// Stages run for this frame.
@@ -151,10 +159,12 @@ pub struct SequenceReport {
 pub struct FrameImages<'a> {
     /// Frame number.
     pub frame: u32,
-    /// Fixed DAC codes, row-major.
-    pub fixed: &'a [u16],
-    /// Reference DAC codes.
-    pub reference: Option<&'a [u16]>,
+    /// Fixed DAC codes, row-major: one plane for a grey sequence, R, G, B for colour.
+    pub fixed: &'a [&'a [u16]],
+    /// Reference DAC codes, the same planes.
+    pub reference: Option<&'a [&'a [u16]]>,
+    /// Each plane's DAC width.
+    pub bits: &'a [u32],
 }
 
 /// The screen box of object `o` in `scene` (a still frame), grown by [`MARGIN`] and cut to
@@ -196,6 +206,45 @@ fn small_window(scene: &Scene, o: usize) -> Option<Window> {
     (win.x1 > win.x0 + 2 && win.y1 > win.y0 + 2).then_some(win)
 }
 
+/// A frame's error figures against its reference.
+#[derive(Clone, Copy)]
+struct Errors {
+    identical: f64,
+    max_abs_diff: u32,
+    weber_max: f64,
+    /// Mean and largest CIEDE2000 (colour).
+    delta_e: Option<(f64, f64)>,
+}
+
+/// The error figures of a render's report: channel 0's (grey), or over the three channels
+/// with the CIEDE2000 (colour).
+fn errors_of(r: &crate::pipeline::Report) -> Errors {
+    let c = &r.end_to_end;
+    let grey = Errors {
+        identical: c.codes.identical_fraction,
+        max_abs_diff: c.codes.max_abs_diff,
+        weber_max: c.weber.max,
+        delta_e: None,
+    };
+    let Some(col) = &r.colour else {
+        return grey;
+    };
+    let n = col.channels.len().max(1) as f64;
+    col.channels.iter().fold(
+        Errors {
+            identical: 0.0,
+            delta_e: Some((col.delta_e.mean, col.delta_e.max)),
+            ..grey
+        },
+        |e, k| Errors {
+            identical: e.identical + k.end_to_end.codes.identical_fraction / n,
+            max_abs_diff: e.max_abs_diff.max(k.end_to_end.codes.max_abs_diff),
+            weber_max: e.weber_max.max(k.end_to_end.weber.max),
+            ..e
+        },
+    )
+}
+
 fn percentile(sorted: &[u64], p: f64) -> u64 {
     let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
     sorted[rank.clamp(1, sorted.len()) - 1]
@@ -217,14 +266,6 @@ pub fn run(
             )
             .into());
     };
-    if scene.image.colour {
-        return Err(scene
-            .error(
-                "image.colour",
-                "`igemu sequence` runs grey scenes only so far; set colour = false (or give grey intensities) to run this sequence",
-            )
-            .into());
-    }
     if o.frames.start >= o.frames.end || o.frames.end > seq.frames {
         let msg = format!(
             "--frames {}..{} is not a non-empty range within the sequence's frames 0..{}",
@@ -256,9 +297,16 @@ pub fn run(
             (k, v["kind"].as_str().unwrap_or("object").to_string())
         })
         .collect();
-    let model = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let temporal_dither = o.reference && hw.dither.temporal;
-    let mut temporal = Temporal::new(&model, scene.image.width, kinds, temporal_dither);
+    let width = scene.image.width;
+    let mut temporal = if scene.image.colour {
+        let bits = [0, 1, 2].map(|c| hw.channel(c).gamma.dac_bits);
+        let display = ColourDisplay::new(&scene.display, bits);
+        Temporal::colour(&display, scene.display.b_max, width, kinds, temporal_dither)
+    } else {
+        let model = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
+        Temporal::new(&model, width, kinds, temporal_dither)
+    };
     let cache = o.reuse.then(Cache::new);
     let emulator = fast::Emulator::new();
     let period_ms = 1e3 / seq.rate_hz;
@@ -271,12 +319,16 @@ pub fn run(
         let t = Instant::now();
         // The frame's codes are handed on borrowed: the fixed-only path's planes go back to
         // the emulator's pool afterwards.
-        let mut consume = |fixed: &[u16], reference: Option<&[u16]>, ideal: Option<&[f64]>| {
+        let mut consume = |fixed: &[&[u16]],
+                           reference: Option<&[&[u16]]>,
+                           bits: &[u32],
+                           ideal: Option<&[f64]>| {
             temporal.add(f, fixed, reference, &win, ideal);
             on_frame(&FrameImages {
                 frame: f,
                 fixed,
                 reference,
+                bits,
             })
         };
         let (cycles, errors) = if o.reference {
@@ -285,17 +337,31 @@ pub fn run(
                 Some(PixelTapF::Values(v)) if temporal_dither => Some(v.as_slice()),
                 _ => None,
             };
-            consume(&r.dac, Some(&r.dac_ref), ideal)?;
-            let c = &r.report.end_to_end;
-            let errors = (
-                c.codes.identical_fraction,
-                c.codes.max_abs_diff,
-                c.weber.max,
-            );
+            let errors = errors_of(&r.report);
+            match &r.colour {
+                Some(c) => {
+                    let planes = |reference: bool| {
+                        c.channels
+                            .iter()
+                            .map(|k| {
+                                if reference {
+                                    &k.dac_ref[..]
+                                } else {
+                                    &k.dac[..]
+                                }
+                            })
+                            .collect::<Vec<_>>()
+                    };
+                    let bits: Vec<u32> = c.channels.iter().map(|k| k.bits).collect();
+                    consume(&planes(false), Some(&planes(true)), &bits, ideal)?;
+                }
+                None => consume(&[&r.dac], Some(&[&r.dac_ref]), &[r.dac_bits], ideal)?,
+            }
             (r.report.cycles.clone(), Some(errors))
         } else {
             let e = emulator.emulate(&fs, hw, RunOptions::FIXED_ONLY, cache.as_ref())?;
-            let done = consume(&e.channels[0], None, None);
+            let planes: Vec<&[u16]> = e.channels.iter().map(Vec::as_slice).collect();
+            let done = consume(&planes, None, &e.bits, None);
             let cycles = e.report.cycles.clone();
             emulator.recycle(e);
             done?;
@@ -317,9 +383,11 @@ pub fn run(
             fps: th.fps,
             bottleneck: cycles.bottleneck.clone(),
             misses_period: th.frame_ms > period_ms,
-            identical_fraction: errors.map(|e| e.0),
-            max_abs_diff: errors.map(|e| e.1),
-            weber_max: errors.map(|e| e.2),
+            identical_fraction: errors.map(|e| e.identical),
+            max_abs_diff: errors.map(|e| e.max_abs_diff),
+            weber_max: errors.map(|e| e.weber_max),
+            delta_e_mean: errors.and_then(|e| e.delta_e.map(|d| d.0)),
+            delta_e_max: errors.and_then(|e| e.delta_e.map(|d| d.1)),
             reused_stages: reused,
             emulated_stages: emulated,
             wall_ms,

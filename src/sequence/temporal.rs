@@ -16,7 +16,12 @@
 //!   sequence, the mean of the fixed codes over the frames against that value (does the
 //!   dither average to it?), and how many of those pixels step by a visible Weber fraction
 //!   from frame to frame (its own flicker at the sequence's rate).
+//!
+//! A colour sequence's luminance is the displayed `Y` of the pixel's R, G, B codes (each
+//! channel's transfer, sRGB primaries, [`ColourDisplay::xyz`]) in cd/m²; its temporal dither
+//! figures are those of channel R.
 
+use crate::colour::ColourDisplay;
 use crate::compare::DisplayModel;
 use serde::Serialize;
 
@@ -113,12 +118,25 @@ pub struct TemporalReport {
     pub dither: Option<DitherTemporal>,
 }
 
+/// How a frame's codes become displayed luminance.
+enum Light {
+    /// One grey channel: the luminance of each code.
+    Grey,
+    /// R, G, B mixed to `Y` through the colour display, times full white (cd/m²).
+    Colour(Box<ColourDisplay>, f64),
+}
+
 /// The accumulator of [`TemporalReport`].
 pub struct Temporal {
+    light: Light,
+    /// Channel 0's luminance of each code (the grey channel, or R).
     lum: Vec<f64>,
     weber: f64,
     width: u32,
-    prev: Option<(Vec<u16>, Option<Vec<u16>>)>,
+    /// This frame's and the previous frame's luminance, fixed and reference (kept in the
+    /// same buffers from frame to frame).
+    cur: (Vec<f64>, Vec<f64>),
+    prev: Option<(Vec<f64>, Vec<f64>)>,
     pairs: Vec<PairFlicker>,
     sum: f64,
     count: u64,
@@ -167,10 +185,35 @@ impl Temporal {
         objects: Vec<(usize, String)>,
         dither: bool,
     ) -> Self {
+        Self::with_light(Light::Grey, model, width, objects, dither)
+    }
+
+    /// [`Temporal::new`] for R, G, B frames on colour display `display` (full white
+    /// `b_max`, cd/m²); the temporal dither's figures are channel R's.
+    pub fn colour(
+        display: &ColourDisplay,
+        b_max: f64,
+        width: u32,
+        objects: Vec<(usize, String)>,
+        dither: bool,
+    ) -> Self {
+        let light = Light::Colour(Box::new(display.clone()), b_max);
+        Self::with_light(light, display.channel(0), width, objects, dither)
+    }
+
+    fn with_light(
+        light: Light,
+        model: &DisplayModel,
+        width: u32,
+        objects: Vec<(usize, String)>,
+        dither: bool,
+    ) -> Self {
         Self {
+            light,
             lum: model.luminance_table(),
             weber: model.weber,
             width,
+            cur: (Vec::new(), Vec::new()),
             prev: None,
             pairs: Vec::new(),
             sum: 0.0,
@@ -194,10 +237,29 @@ impl Temporal {
         }
     }
 
-    /// Total luminance above the background and the peak over window `w` of `codes`.
-    fn window(&self, codes: &[u16], w: Window) -> (f64, f64) {
-        let at = |x: u32, y: u32| codes[(y * self.width + x) as usize];
-        let mut ring: Vec<u16> = Vec::new();
+    /// The displayed luminance of a frame's planes (one grey plane, or R, G, B) into `out`.
+    fn light(&self, planes: &[&[u16]], out: &mut Vec<f64>) {
+        out.clear();
+        match &self.light {
+            Light::Grey => out.extend(planes[0].iter().map(|&c| self.lum[c as usize])),
+            Light::Colour(d, b_max) => {
+                let [r, g, b] = [0, 1, 2].map(|c| planes[c]);
+                out.extend(
+                    r.iter()
+                        .zip(g)
+                        .zip(b)
+                        .map(|((&r, &g), &b)| d.xyz([r, g, b]).y * b_max),
+                );
+            }
+        }
+    }
+
+    /// Total luminance above the background and the peak over window `w` of luminance
+    /// plane `lum` (the background: the median of the window's border; a grey plane's
+    /// luminance rises with the code, so that is the median code's).
+    fn window(&self, lum: &[f64], w: Window) -> (f64, f64) {
+        let at = |x: u32, y: u32| lum[(y * self.width + x) as usize];
+        let mut ring: Vec<f64> = Vec::new();
         for y in w.y0..w.y1 {
             for x in w.x0..w.x1 {
                 if y == w.y0 || y + 1 == w.y1 || x == w.x0 || x + 1 == w.x1 {
@@ -205,12 +267,12 @@ impl Temporal {
                 }
             }
         }
-        ring.sort_unstable();
-        let bg = self.lum[ring.get(ring.len() / 2).copied().unwrap_or(0) as usize];
+        ring.sort_unstable_by(f64::total_cmp);
+        let bg = ring.get(ring.len() / 2).copied().unwrap_or(self.lum[0]);
         let (mut total, mut peak) = (0.0, 0.0f64);
         for y in w.y0..w.y1 {
             for x in w.x0..w.x1 {
-                let d = self.lum[at(x, y) as usize] - bg;
+                let d = at(x, y) - bg;
                 total += d;
                 peak = peak.max(d);
             }
@@ -218,49 +280,57 @@ impl Temporal {
         (total, peak)
     }
 
-    /// Adds frame `frame`: its fixed codes, the reference's (if run), each small object's
-    /// window (in the order given to [`Temporal::new`]) and, for a temporal dither, the
-    /// reference's value before the dither (DAC codes as reals).
+    /// Adds frame `frame`: its fixed codes (one grey plane, or R, G, B), the reference's
+    /// (if run), each small object's window (in the order given to [`Temporal::new`]) and,
+    /// for a temporal dither, the reference's value before the dither (DAC codes as reals,
+    /// channel 0).
     pub fn add(
         &mut self,
         frame: u32,
-        fixed: &[u16],
-        reference: Option<&[u16]>,
+        fixed: &[&[u16]],
+        reference: Option<&[&[u16]]>,
         windows: &[Window],
         ideal: Option<&[f64]>,
     ) {
+        let (mut lf, mut lr) = std::mem::take(&mut self.cur);
+        self.light(fixed, &mut lf);
+        if let Some(r) = reference {
+            self.light(r, &mut lr);
+        }
         for (k, w) in windows.iter().enumerate() {
-            let (t, p) = self.window(fixed, *w);
+            let (t, p) = self.window(&lf, *w);
             let o = &mut self.objects[k];
             o.total_fixed.push(t);
             o.peak_fixed.push(p);
-            if let Some(r) = reference {
-                let (t, p) = self.window(r, *w);
+            if reference.is_some() {
+                let (t, p) = self.window(&lr, *w);
                 let o = &mut self.objects[k];
                 o.total_reference.push(t);
                 o.peak_reference.push(p);
             }
         }
-        if let (Some((pf, Some(pr))), Some(r)) = (&self.prev, reference) {
+        if let (Some((pf, pr)), Some(_)) = (&self.prev, reference)
+            && !pr.is_empty()
+        {
             let (mut max, mut sum, mut visible) = (0.0f64, 0.0, 0u64);
-            for i in 0..fixed.len() {
-                let l = |c: u16| self.lum[c as usize];
-                let df = l(fixed[i]) - l(pf[i]);
-                let dr = l(r[i]) - l(pr[i]);
-                let e = (df - dr).abs() / (self.weber * l(r[i]).max(l(pr[i])));
+            for i in 0..lf.len() {
+                let df = lf[i] - pf[i];
+                let dr = lr[i] - pr[i];
+                let e = (df - dr).abs() / (self.weber * lr[i].max(pr[i]));
                 max = max.max(e);
                 sum += e;
                 visible += u64::from(e > 1.0);
             }
             self.sum += sum;
-            self.count += fixed.len() as u64;
+            self.count += lf.len() as u64;
             self.pairs.push(PairFlicker {
                 frame,
                 max_weber: max,
-                mean_weber: sum / fixed.len().max(1) as f64,
+                mean_weber: sum / lf.len().max(1) as f64,
                 visible_pixels: visible,
             });
         }
+        let fixed = fixed[0];
         if let (Some(d), Some(ideal)) = (&mut self.dither, ideal) {
             if d.frames == 0 {
                 d.ideal = ideal.to_vec();
@@ -277,17 +347,11 @@ impl Temporal {
             }
             d.frames += 1;
         }
-        // The previous frame's planes are kept in the same buffers from frame to frame.
-        let prev = self.prev.get_or_insert_with(|| (Vec::new(), None));
-        prev.0.clear();
-        prev.0.extend_from_slice(fixed);
-        match (reference, &mut prev.1) {
-            (Some(r), Some(p)) => {
-                p.clear();
-                p.extend_from_slice(r);
-            }
-            (r, p) => *p = r.map(<[u16]>::to_vec),
+        if reference.is_none() {
+            lr.clear();
         }
+        // This frame's planes become the previous frame's, whose buffers the next takes.
+        self.cur = self.prev.replace((lf, lr)).unwrap_or_default();
     }
 
     /// The report of the frames added.
@@ -361,15 +425,15 @@ mod tests {
         let mut t = Temporal::new(&model(), 4, vec![], false);
         let a = [10u16, 200, 30, 40];
         let b = [12u16, 180, 30, 90];
-        t.add(0, &a, Some(&a), &[], None);
-        t.add(1, &b, Some(&b), &[], None);
+        t.add(0, &[&a], Some(&[&a]), &[], None);
+        t.add(1, &[&b], Some(&[&b]), &[], None);
         let r = t.finish();
         assert_eq!(r.pairs, 1);
         assert_eq!(r.max_excess_weber, Some(0.0));
         // A pixel the fixed output steps while the reference holds is visible.
         let mut t = Temporal::new(&model(), 4, vec![], false);
-        t.add(0, &a, Some(&a), &[], None);
-        t.add(1, &b, Some(&a), &[], None);
+        t.add(0, &[&a], Some(&[&a]), &[], None);
+        t.add(1, &[&b], Some(&[&a]), &[], None);
         let r = t.finish();
         assert!(r.max_excess_weber.unwrap() > 1.0);
         assert_eq!(r.visible_excess, 3);
@@ -388,7 +452,7 @@ mod tests {
         for k in 0..4u32 {
             f.fill(0);
             f[12 + (k % 2) as usize] = 200;
-            t.add(k, &f, None, &[w], None);
+            t.add(k, &[&f], None, &[w], None);
         }
         let r = t.finish();
         assert_eq!(r.objects[0].ripple_fixed_pct, 0.0);
@@ -398,7 +462,7 @@ mod tests {
         for k in 0..4u32 {
             f.fill(0);
             f[12] = if k % 2 == 0 { 200 } else { 100 };
-            t.add(k, &f, None, &[w], None);
+            t.add(k, &[&f], None, &[w], None);
         }
         let r = t.finish();
         assert!(r.objects[0].ripple_fixed_pct > 50.0);
@@ -410,7 +474,7 @@ mod tests {
         // Value 10.5 dithered as 10, 11, 10, 11; the second pixel moves and is left out.
         for k in 0..4u32 {
             let c = 10 + (k % 2) as u16;
-            t.add(k, &[c, 50], None, &[], Some(&[10.5, 50.0 + k as f64]));
+            t.add(k, &[&[c, 50]], None, &[], Some(&[10.5, 50.0 + k as f64]));
         }
         let d = t.finish().dither.expect("temporal dither");
         assert_eq!(d.static_pixels, 1);
