@@ -515,7 +515,8 @@ fn cli_widths_scene_validates_by_emulation() {
 /// A thin lens after a log-coded frame: the DoF stage potentiates the frame through a LUT of
 /// `round(W * log_gamma_linear(a))` entries into the linear frame format, blurs it, and the
 /// gamma stage then reads a linear frame (its linear LUT, not eq. 15). On both Fig. 3 scenes
-/// over 85 % of the codes equal the float reference's and 99.9 % are within one code. Dither stays refused.
+/// over 85 % of the codes equal the float reference's and 99.9 % are within one code. A dither after the
+/// LUT reads that linear frame; before the LUT it is refused.
 #[test]
 fn log_add_with_depth_of_field_potentiates_the_frame_and_refuses_a_dither_before_the_lut() {
     use igemu::stage::StageId;
