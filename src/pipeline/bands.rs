@@ -13,13 +13,15 @@
 //! A small plan (the sample-side memory under [`ONE_BAND_MAX`]) runs in one band, which is
 //! the whole-region code path. A plan with the logdomain stage runs in one band too.
 
+use super::band_tail::{Tail, join};
+use super::cache::Cache;
 use super::plan::Plan;
 use super::run::{Outcome, execute_keep};
+use super::tile_rows::Keys;
 use crate::cost::{PackCheck, pack};
 use crate::error::Result;
-use crate::stage::accumulate::{Frame, PointFrags};
-use crate::stage::taps::{FrameTap, SampleTap, SampleTapF};
-use crate::stage::visibility::{Samples, SamplesF};
+use crate::stage::accumulate::Frame;
+use crate::stage::taps::FrameTap;
 use crate::stage::{
     self, AnyFixed, Band, Cx, Layout, LocalError, Memo, Region, RunOptions, SampleRegion, StageId,
     StageReport, Taps, TokenKind, Tokens,
@@ -165,7 +167,8 @@ impl Merge {
                 for (a, b) in m.signals.iter_mut().zip(&r.signals) {
                     a.merge(b);
                 }
-                for (k, v) in &r.notes {
+                // Counts add up; a width or a memory's size (`*_bits`) is the band's own.
+                for (k, v) in r.notes.iter().filter(|(k, _)| !k.ends_with("_bits")) {
                     if let (Some(a), Some(b)) =
                         (m.notes.get(k).and_then(|x| x.as_u64()), v.as_u64())
                     {
@@ -247,116 +250,28 @@ impl Merge {
     }
 }
 
-/// The rows `k0..` the next band's filter windows may still read: the previous band's
-/// accumulate input.
-struct Tail {
-    k0: i64,
-    fixed: Arc<SampleTap>,
-    /// `None` on the fixed-only path.
-    float: Option<Arc<SampleTapF>>,
-}
-
-fn join_points<T: Copy>(
-    tail: Option<(&[PointFrags<T>], usize)>,
-    band: &[PointFrags<T>],
-    shift: usize,
-) -> Vec<PointFrags<T>> {
-    band.iter()
-        .enumerate()
-        .map(|(j, p)| {
-            let mut samples = Vec::new();
-            if let Some((t, skip)) = tail {
-                samples.extend(
-                    t[j].samples
-                        .iter()
-                        .filter(|&&s| s as usize >= skip)
-                        .map(|&s| s - skip as u32),
-                );
-            }
-            samples.extend(p.samples.iter().map(|&s| s + shift as u32));
-            PointFrags { i: p.i, samples }
-        })
-        .collect()
-}
-
-/// Joins the kept rows `read..own.0` of `tail` with the band's own buffers: the sample
-/// buffer the band's filter windows read, its rows shifted up by `dk` (the band's frame
-/// starts at row 0).
-fn join(
-    tail: Option<&Tail>,
-    read: i64,
-    dk: i64,
-    own: &SampleTap,
-    own_f: Option<&SampleTapF>,
-) -> Tail {
-    let reg = own.samples.reg;
-    let w = reg.width();
-    let kept = (reg.k0 - read) as usize * w;
-    let skip = tail.map_or(0, |t| (read - t.k0) as usize * w);
-    let joined = SampleRegion {
-        k0: read - dk,
-        k1: reg.k1 - dk,
-        ..reg
-    };
-    fn cat<T: Copy>(a: Option<&[T]>, skip: usize, kept: usize, b: &[T]) -> Vec<T> {
-        let mut v = Vec::with_capacity(kept + b.len());
-        if let Some(a) = a {
-            v.extend_from_slice(&a[skip..skip + kept]);
-        }
-        v.extend_from_slice(b);
-        v
-    }
-    let ts = tail.map(|t| &t.fixed.samples);
-    let fixed = SampleTap {
-        samples: Samples {
-            reg: joined,
-            z: cat(ts.map(|s| s.z.as_slice()), skip, kept, &own.samples.z),
-            prim: cat(ts.map(|s| s.prim.as_slice()), skip, kept, &own.samples.prim),
-            i: cat(ts.map(|s| s.i.as_slice()), skip, kept, &own.samples.i),
-        },
-        points: join_points(
-            tail.map(|t| (t.fixed.points.as_slice(), skip)),
-            &own.points,
-            kept,
-        ),
-        bg: own.bg,
-        coding: own.coding,
-    };
-    let float = own_f.map(|own_f| {
-        let tf = tail.and_then(|t| t.float.as_ref()).map(|f| &f.samples);
-        SampleTapF {
-            samples: SamplesF {
-                reg: joined,
-                z: cat(tf.map(|s| s.z.as_slice()), skip, kept, &own_f.samples.z),
-                prim: cat(
-                    tf.map(|s| s.prim.as_slice()),
-                    skip,
-                    kept,
-                    &own_f.samples.prim,
-                ),
-                i: cat(tf.map(|s| s.i.as_slice()), skip, kept, &own_f.samples.i),
-            },
-            points: join_points(
-                tail.and_then(|t| t.float.as_ref())
-                    .map(|f| (f.points.as_slice(), skip)),
-                &own_f.points,
-                kept,
-            ),
-            bg: own_f.bg,
-        }
-    });
-    Tail {
-        k0: read,
-        fixed: Arc::new(fixed),
-        float: float.map(Arc::new),
-    }
+/// What one band gave: each stage's outcome (no taps), the band's frame rows and the
+/// sample rows the next band's filter windows read. A sequence's stage cache keeps it for
+/// the next frame ([`super::Cache::tile_rows`], keyed by [`super::tile_rows::Keys`]).
+pub struct BandResult {
+    /// Each stage of the group's outcome, without taps.
+    outcomes: Vec<Outcome>,
+    /// The band's frame rows (accumulate's output).
+    frame: Arc<FrameTap>,
+    /// Its float frame rows (with a reference).
+    float: Option<Arc<Vec<f64>>>,
+    /// The accumulate stage's private result (its cost and memories read it).
+    acc: Arc<AnyFixed>,
+    /// The rows the next band reads before its own (`None` for the last band).
+    tail: Option<Tail>,
 }
 
 /// Runs the banded stages `group` (raster, visibility, accumulate in flow order) of `plan`
 /// band by band of `rows` pixel rows on the taps `input`, and returns each stage's merged
 /// outcome: work, signals, tokens, local errors and timings added up over the bands; the
 /// taps after raster and visibility without fragment lists and sample buffers (no stage
-/// keeps a whole-screen one); the whole frame and float frame after accumulate.
+/// keeps a whole-screen one); the whole frame and float frame after accumulate. With a
+/// `cache` that keeps tile rows, a band whose key is in it is not run again.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     group: &[StageId],
@@ -364,7 +279,7 @@ pub fn run(
     hw: &crate::config::HwConfig,
     plan: &Plan,
     opts: RunOptions,
-    (memo, pool): (&dyn Memo, &stage::Pool),
+    (memo, pool, cache): (&dyn Memo, &stage::Pool, Option<&Cache>),
     input_keys: &[u64],
     input: &Taps,
     rows: u32,
@@ -387,90 +302,61 @@ pub fn run(
     let mut coding = None;
     let mut merged: Vec<Merge> = group.iter().map(|_| Merge::default()).collect();
     let mut tail: Option<Tail> = None;
-    let mut last_acc: Option<AnyFixed> = None;
+    let mut last_acc: Option<Arc<AnyFixed>> = None;
     let list = bands(rows, height);
-    let n = i64::from(l.grid.n);
+    let keys = cache.filter(|c| c.keeps_tile_rows()).map(|_| {
+        let names: Vec<&str> = group.iter().map(|g| g.name()).collect();
+        Keys::new(&names, hw, l, opts, input)
+    });
+    let one = OneBand {
+        group,
+        scene,
+        hw,
+        plan,
+        opts,
+        memo,
+        pool,
+        input_keys,
+        input,
+    };
+    let mut all_reused = true;
     for (bi, b) in list.iter().enumerate() {
-        let r = band_rows(l, b, bi + 1 == list.len());
-        let own = SampleRegion {
-            k0: r.own.0,
-            k1: r.own.1,
-            ..l.samples
-        };
-        let geo = Layout {
-            samples: own,
-            band: Some(*b),
-            ..l.clone()
-        };
-        let mut taps = input.clone();
-        for (j, &id) in group.iter().enumerate() {
-            let st = stage::get(id);
-            let dk = i64::from(b.y0) * n;
-            let acc_layout;
-            let layout = if id == StageId::Accumulate {
-                let joined = join(
-                    tail.as_ref(),
-                    r.read,
-                    dk,
-                    taps.fixed.samples(),
-                    taps.float.samples.as_deref(),
-                );
-                let rows = Region {
-                    y0: b.y0,
-                    y1: b.y1,
-                    ..Region::screen(width, height)
-                };
-                let c = l.region.clip(&rows);
-                let region = if c.is_empty() {
-                    Region::default()
-                } else {
-                    Region {
-                        y0: c.y0 - b.y0,
-                        y1: c.y1 - b.y0,
-                        ..c
-                    }
-                };
-                acc_layout = Layout {
-                    region,
-                    samples: joined.fixed.samples.reg,
-                    tiles: l.tiles.band(b.y0, b.y1),
-                    ..geo.clone()
-                };
-                taps.fixed.samples = Some(joined.fixed.clone());
-                taps.float.samples.clone_from(&joined.float);
-                tail = Some(joined);
-                &acc_layout
-            } else {
-                &geo
-            };
-            let cx = Cx {
-                scene,
-                hw,
-                layout,
-                opts,
-                input_key: input_keys[j],
-                memo,
-                pool,
-            };
-            let (o, fixed) = execute_keep(st, &cx, &taps)?;
-            merged[j].add(&o, id != StageId::Accumulate, b.y0);
-            taps = o.taps;
-            if id == StageId::Accumulate {
-                let band = taps.fixed.frame();
-                let at = b.y0 as usize * width as usize;
-                let len = band.frame.acc.len();
-                frame.acc[at..at + len].copy_from_slice(&band.frame.acc);
-                frame.depth[at..at + len].copy_from_slice(&band.frame.depth);
-                frame.coverage[at..at + len].copy_from_slice(&band.frame.coverage);
-                if let Some(f) = &taps.float.frame {
-                    frame_f[at..at + len].copy_from_slice(f);
-                }
-                coding = Some(band.coding.clone());
-                last_acc = Some(fixed);
+        let last = bi + 1 == list.len();
+        let r = band_rows(l, b, last);
+        let next = list
+            .get(bi + 1)
+            .map(|nb| band_rows(l, nb, bi + 2 == list.len()).read);
+        let run = || one.run(b, &r, tail.as_ref(), next);
+        let res = match (cache, &keys) {
+            (Some(c), Some(k)) => {
+                let touched = l.tiles.band(b.y0, b.y1).touched;
+                let (res, reused) =
+                    c.tile_row(k.band(b, last, (r.read, r.own.1), &touched), run)?;
+                all_reused &= reused;
+                res
             }
+            _ => Arc::new(run()?),
+        };
+        for ((m, o), &id) in merged.iter_mut().zip(&res.outcomes).zip(group) {
+            m.add(o, id != StageId::Accumulate, b.y0);
         }
+        let band = &res.frame;
+        let at = b.y0 as usize * width as usize;
+        let len = band.frame.acc.len();
+        frame.acc[at..at + len].copy_from_slice(&band.frame.acc);
+        frame.depth[at..at + len].copy_from_slice(&band.frame.depth);
+        frame.coverage[at..at + len].copy_from_slice(&band.frame.coverage);
+        if let Some(f) = &res.float {
+            frame_f[at..at + len].copy_from_slice(f);
+        }
+        coding = Some(band.coding.clone());
+        last_acc = Some(res.acc.clone());
+        tail.clone_from(&res.tail);
     }
     drop(tail);
+    if let Some(c) = cache.filter(|c| c.keeps_tile_rows()) {
+        c.count_banded(group.len() as u64, all_reused);
+    }
     // The taps after each stage: no fragment lists or sample buffers; the whole frame.
     let mut taps = input.clone();
     let mut out = Vec::with_capacity(group.len());
@@ -516,4 +402,117 @@ pub fn run(
         out.push(m.finish(taps.clone(), packs));
     }
     Ok(out)
+}
+
+/// What every band of one banded run shares.
+struct OneBand<'a> {
+    group: &'a [StageId],
+    scene: &'a crate::scene::Scene,
+    hw: &'a crate::config::HwConfig,
+    plan: &'a Plan,
+    opts: RunOptions,
+    memo: &'a dyn Memo,
+    pool: &'a stage::Pool,
+    input_keys: &'a [u64],
+    input: &'a Taps,
+}
+
+impl OneBand<'_> {
+    /// Runs the group on band `b` (its rows `r`), its filter windows reading `tail`'s rows
+    /// before its own; keeps the rows from `next` on for the next band.
+    fn run(
+        &self,
+        b: &Band,
+        r: &Rows,
+        tail: Option<&Tail>,
+        next: Option<i64>,
+    ) -> Result<BandResult> {
+        let l = &self.plan.layout;
+        let (width, height) = (l.grid.width, l.grid.height);
+        let n = i64::from(l.grid.n);
+        let own = SampleRegion {
+            k0: r.own.0,
+            k1: r.own.1,
+            ..l.samples
+        };
+        let geo = Layout {
+            samples: own,
+            band: Some(*b),
+            ..l.clone()
+        };
+        let mut taps = self.input.clone();
+        let mut outcomes = Vec::with_capacity(self.group.len());
+        let mut kept = None;
+        let mut acc = None;
+        for (j, &id) in self.group.iter().enumerate() {
+            let st = stage::get(id);
+            let acc_layout;
+            let layout = if id == StageId::Accumulate {
+                let joined = join(
+                    tail,
+                    r.read,
+                    i64::from(b.y0) * n,
+                    taps.fixed.samples(),
+                    taps.float.samples.as_deref(),
+                );
+                let rows = Region {
+                    y0: b.y0,
+                    y1: b.y1,
+                    ..Region::screen(width, height)
+                };
+                let c = l.region.clip(&rows);
+                let region = if c.is_empty() {
+                    Region::default()
+                } else {
+                    Region {
+                        y0: c.y0 - b.y0,
+                        y1: c.y1 - b.y0,
+                        ..c
+                    }
+                };
+                acc_layout = Layout {
+                    region,
+                    samples: joined.fixed.samples.reg,
+                    tiles: l.tiles.band(b.y0, b.y1),
+                    ..geo.clone()
+                };
+                taps.fixed.samples = Some(joined.fixed.clone());
+                taps.float.samples.clone_from(&joined.float);
+                kept = next.map(|k| joined.from(k));
+                &acc_layout
+            } else {
+                &geo
+            };
+            let cx = Cx {
+                scene: self.scene,
+                hw: self.hw,
+                layout,
+                opts: self.opts,
+                input_key: self.input_keys[j],
+                memo: self.memo,
+                pool: self.pool,
+            };
+            let (o, fixed) = execute_keep(st, &cx, &taps)?;
+            taps = o.taps;
+            outcomes.push(Outcome {
+                taps: Taps::default(),
+                images: Vec::new(),
+                ..o
+            });
+            if id == StageId::Accumulate {
+                acc = Some(Arc::new(fixed));
+            }
+        }
+        Ok(BandResult {
+            outcomes,
+            frame: taps
+                .fixed
+                .frame
+                .clone()
+                .expect("accumulate wrote the band's frame"),
+            float: taps.float.frame.clone(),
+            acc: acc.expect("the group ends with accumulate"),
+            tail: kept,
+        })
+    }
 }

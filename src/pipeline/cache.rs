@@ -4,10 +4,16 @@
 //! stages share through [`Memo`] (e.g. the float gamma curve of one frame) and cycle
 //! simulations (keyed by their workload).
 //!
+//! A cache made with [`Cache::with_tile_rows`] (a sequence's) also keeps the bands of a
+//! banded run, one tile row each, keyed by the primitives they read
+//! ([`super::tile_rows::Keys`]): a frame emulates only the tile rows whose primitives
+//! changed since an earlier frame.
+//!
 //! Entries are shared read-only (`Arc`), so a reused result is identical to a recomputed
 //! one. No lock is held while a stage runs; the least recently used entries beyond the
 //! capacity are dropped.
 
+use super::bands::BandResult;
 use super::run::Outcome;
 use crate::cycles::SimResult;
 use crate::error::Result;
@@ -24,6 +30,8 @@ pub const STAGE_CAPACITY: usize = 64;
 pub const MEMO_CAPACITY: usize = 32;
 /// Simulations kept.
 pub const SIM_CAPACITY: usize = 64;
+/// Tile rows kept (two frames of a 2048-row screen in 16-pixel tile rows).
+pub const TILE_ROW_CAPACITY: usize = 256;
 
 /// A map with least-recently-used eviction.
 struct Lru<T> {
@@ -76,6 +84,10 @@ pub struct Cache {
     sims: Lru<Arc<(SimResult, f64)>>,
     hits: AtomicU64,
     misses: AtomicU64,
+    /// `None`: tile rows are not kept.
+    tile_rows: Option<Lru<Arc<BandResult>>>,
+    row_hits: AtomicU64,
+    row_misses: AtomicU64,
 }
 
 impl Default for Cache {
@@ -93,7 +105,56 @@ impl Cache {
             sims: Lru::new(SIM_CAPACITY),
             hits: AtomicU64::new(0),
             misses: AtomicU64::new(0),
+            tile_rows: None,
+            row_hits: AtomicU64::new(0),
+            row_misses: AtomicU64::new(0),
         }
+    }
+
+    /// An empty cache that also keeps the tile rows of banded runs (a sequence's frames;
+    /// a sweep's rows differ in configuration, not in primitives, and a banded sweep runs
+    /// bands to bound its memory, so [`Cache::new`] keeps none).
+    pub fn with_tile_rows() -> Self {
+        Self {
+            tile_rows: Some(Lru::new(TILE_ROW_CAPACITY)),
+            ..Self::new()
+        }
+    }
+
+    /// Whether the cache keeps tile rows.
+    pub fn keeps_tile_rows(&self) -> bool {
+        self.tile_rows.is_some()
+    }
+
+    /// The band with key `key`: kept (and `true`), or `run()` (then kept when the cache
+    /// keeps tile rows).
+    pub fn tile_row(
+        &self,
+        key: u64,
+        run: impl FnOnce() -> Result<BandResult>,
+    ) -> Result<(Arc<BandResult>, bool)> {
+        let Some(rows) = &self.tile_rows else {
+            return Ok((Arc::new(run()?), false));
+        };
+        let (v, hit) = rows.get_or(key, || run().map(Arc::new))?;
+        let n = if hit {
+            &self.row_hits
+        } else {
+            &self.row_misses
+        };
+        n.fetch_add(1, Relaxed);
+        Ok((v, hit))
+    }
+
+    /// Counts the `n` stages of a banded run as reused (every tile row was) or emulated.
+    pub fn count_banded(&self, n: u64, reused: bool) {
+        let c = if reused { &self.hits } else { &self.misses };
+        c.fetch_add(n, Relaxed);
+    }
+
+    /// Tile rows (reused, emulated) so far.
+    pub fn tile_row_stats(&self) -> (u64, u64) {
+        (self.row_hits.load(Relaxed), self.row_misses.load(Relaxed))
     }
 
     /// The outcome of the stage with key `key`: cached (and `true`), or `run()` (then cached).

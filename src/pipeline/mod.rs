@@ -8,6 +8,7 @@
 //! compare both with the depth-of-field truth ([`truth`]). The fixed-only fast path
 //! ([`fast`]) runs the fixed model and the cycle model alone.
 
+mod band_tail;
 pub mod bands;
 pub mod cache;
 pub mod colour;
@@ -16,6 +17,7 @@ pub mod fast;
 pub mod plan;
 pub mod report;
 pub mod run;
+pub mod tile_rows;
 pub mod truth;
 
 pub use cache::Cache;

@@ -258,7 +258,7 @@ impl Runner<'_> {
                     hw,
                     plan,
                     opts,
-                    (self.memo, self.pool),
+                    (self.memo, self.pool, self.cache),
                     &ins,
                     &taps,
                     rows,

@@ -4,11 +4,15 @@
 //! over the sequence the worst frame, the frames that miss the period, percentiles and the
 //! temporal metrics ([`temporal`]). docs/sequence.md.
 //!
-//! Reuse: the frames share one stage cache ([`Cache`]), so a stage whose inputs are the
-//! same as in an earlier frame (every stage of a frame in which nothing moved) is not run
-//! again; the codes are those of a fresh emulation (the cache returns the identical
-//! outcome). The reuse is per stage over the whole screen: a frame in which anything moves
-//! is emulated from the first stage whose input changed, on every tile.
+//! Reuse: the frames share one stage cache ([`Cache::with_tile_rows`]). A grey sequence
+//! runs raster, visibility and accumulate band by band of one tile row
+//! ([`pipeline::bands`]), and a tile row whose primitives (after quantisation), tiles and
+//! filter-window rows are the same as in an earlier frame keeps that frame's results
+//! ([`pipeline::tile_rows`]): only the tile rows something moved in are emulated again.
+//! The stages after accumulate (depth of field, gamma, dither) run on the whole frame, and
+//! again whenever any tile row changed (their stage key is the frame's); a frame in which
+//! nothing moved reuses every stage. The codes and reports are those of a full emulation
+//! (the cache returns the identical results; `tests/sequence_tiles.rs`).
 
 pub mod temporal;
 
@@ -70,6 +74,10 @@ pub struct FrameRecord {
     pub reused_stages: u64,
     /// Stages run for this frame.
     pub emulated_stages: u64,
+    /// Tile rows whose raster, visibility and accumulate results came from an earlier frame.
+    pub tile_rows_reused: u64,
+    /// Tile rows emulated for this frame.
+    pub tile_rows_emulated: u64,
     /// Wall time of the frame's emulation, ms.
     pub wall_ms: f64,
 }
@@ -118,6 +126,20 @@ pub struct ReuseReport {
     pub stages_emulated: u64,
     /// Stage outcomes reused over the sequence.
     pub stages_reused: u64,
+    /// Why tile rows are not reused (`None`: they are).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tile_rows_off: Option<String>,
+    /// Tile rows of one frame (pixel rows of `tile_size`).
+    pub tile_rows: u32,
+    /// Tile size, pixels.
+    pub tile_size: u32,
+    /// Tile rows emulated over the frames after the first.
+    pub tile_rows_emulated: u64,
+    /// Tile rows reused over the frames after the first.
+    pub tile_rows_reused: u64,
+    /// Wall time of the first frame (every tile row emulated) over the median wall time of
+    /// the frames after it (measured in this run; 0 with one frame).
+    pub first_over_later_wall: f64,
     /// Emulation wall time over all frames, s.
     pub wall_s: f64,
     /// Frames per second of emulation (frames / wall time).
@@ -245,6 +267,16 @@ fn errors_of(r: &crate::pipeline::Report) -> Errors {
     )
 }
 
+/// The first frame's wall time over the median of the later frames' (0 with one frame).
+fn first_over_later(records: &[FrameRecord]) -> f64 {
+    let mut later: Vec<f64> = records.iter().skip(1).map(|r| r.wall_ms).collect();
+    if later.is_empty() {
+        return 0.0;
+    }
+    later.sort_by(f64::total_cmp);
+    records[0].wall_ms / later[later.len() / 2].max(1e-9)
+}
+
 fn percentile(sorted: &[u64], p: f64) -> u64 {
     let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
     sorted[rank.clamp(1, sorted.len()) - 1]
@@ -307,7 +339,21 @@ pub fn run(
         let model = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
         Temporal::new(&model, width, kinds, temporal_dither)
     };
-    let cache = o.reuse.then(Cache::new);
+    let cache = o.reuse.then(Cache::with_tile_rows);
+    let tile = hw.cycles.tile;
+    let tile_rows_off = if !o.reuse {
+        Some("reuse is off (--no-reuse)".to_string())
+    } else if scene.image.colour {
+        Some(
+            "a colour plan does not run in bands of tile rows yet: only whole stages are reused"
+                .to_string(),
+        )
+    } else {
+        None
+    };
+    // Bands of one tile row (a plan that runs in one band, e.g. a log-add frame, ignores it).
+    let band_rows = (o.reuse && !scene.image.colour).then_some(tile);
+    let opts = |base: RunOptions| RunOptions { band_rows, ..base };
     let emulator = fast::Emulator::new();
     let period_ms = 1e3 / seq.rate_hz;
     let mut records = Vec::with_capacity(windows.len());
@@ -316,6 +362,7 @@ pub fn run(
         let fs = scene.frame(f)?;
         let win: Vec<Window> = small.iter().filter_map(|&j| win[j]).collect();
         let (h0, m0) = cache.as_ref().map_or((0, 0), Cache::stats);
+        let (rh0, rm0) = cache.as_ref().map_or((0, 0), Cache::tile_row_stats);
         let t = Instant::now();
         // The frame's codes are handed on borrowed: the fixed-only path's planes go back to
         // the emulator's pool afterwards.
@@ -332,7 +379,7 @@ pub fn run(
             })
         };
         let (cycles, errors) = if o.reference {
-            let r = pipeline::render_with(&fs, hw, RunOptions::FAST, cache.as_ref())?;
+            let r = pipeline::render_with(&fs, hw, opts(RunOptions::FAST), cache.as_ref())?;
             let ideal = match r.taps(StageId::Gamma).map(|t| t.float.pixels()) {
                 Some(PixelTapF::Values(v)) if temporal_dither => Some(v.as_slice()),
                 _ => None,
@@ -359,7 +406,7 @@ pub fn run(
             }
             (r.report.cycles.clone(), Some(errors))
         } else {
-            let e = emulator.emulate(&fs, hw, RunOptions::FIXED_ONLY, cache.as_ref())?;
+            let e = emulator.emulate(&fs, hw, opts(RunOptions::FIXED_ONLY), cache.as_ref())?;
             let planes: Vec<&[u16]> = e.channels.iter().map(Vec::as_slice).collect();
             let done = consume(&planes, None, &e.bits, None);
             let cycles = e.report.cycles.clone();
@@ -369,6 +416,7 @@ pub fn run(
         };
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
         let (h1, m1) = cache.as_ref().map_or((0, 0), Cache::stats);
+        let (rh1, rm1) = cache.as_ref().map_or((0, 0), Cache::tile_row_stats);
         let stages = cycles.plan.stages.len() as u64;
         let (reused, emulated) = if cache.is_some() {
             (h1 - h0, m1 - m0)
@@ -390,6 +438,8 @@ pub fn run(
             delta_e_max: errors.and_then(|e| e.delta_e.map(|d| d.1)),
             reused_stages: reused,
             emulated_stages: emulated,
+            tile_rows_reused: rh1 - rh0,
+            tile_rows_emulated: rm1 - rm0,
             wall_ms,
         });
     }
@@ -423,10 +473,16 @@ pub fn run(
         frames_fully_reused: records
             .iter()
             .skip(1)
-            .filter(|r| r.emulated_stages == 0)
+            .filter(|r| r.emulated_stages == 0 && r.tile_rows_emulated == 0)
             .count() as u32,
         stages_emulated: records.iter().map(|r| r.emulated_stages).sum(),
         stages_reused: records.iter().map(|r| r.reused_stages).sum(),
+        tile_rows_off,
+        tile_rows: scene.image.height.div_ceil(tile),
+        tile_size: tile,
+        tile_rows_emulated: records.iter().skip(1).map(|r| r.tile_rows_emulated).sum(),
+        tile_rows_reused: records.iter().skip(1).map(|r| r.tile_rows_reused).sum(),
+        first_over_later_wall: first_over_later(&records),
         wall_s,
         frames_per_s: n as f64 / wall_s.max(1e-9),
     };

@@ -2,6 +2,7 @@
 //! a synthetic lens.
 #![allow(dead_code)]
 
+pub mod reports;
 pub mod sim;
 pub mod sims;
 

@@ -226,7 +226,7 @@ fn print(r: &SequenceReport) -> Result<(), Error> {
     // A colour sequence with a reference adds each frame's CIEDE2000 (mean / largest).
     let colour = r.frames.iter().any(|f| f.delta_e_max.is_some());
     outln!(
-        "{:>6} {:>10} {:>9} {:>8} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>8}{}",
+        "{:>6} {:>10} {:>9} {:>8} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>9} {:>8}{}",
         "frame",
         "cycles",
         "ms",
@@ -237,6 +237,7 @@ fn print(r: &SequenceReport) -> Result<(), Error> {
         "weber",
         "reused",
         "emulated",
+        "tile rows",
         "wall ms",
         if colour { "   dE00 mean/max" } else { "" }
     );
@@ -246,7 +247,7 @@ fn print(r: &SequenceReport) -> Result<(), Error> {
             _ => String::new(),
         };
         outln!(
-            "{:>6} {:>10} {:>9.3} {:>8.1} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>8.1}{de}",
+            "{:>6} {:>10} {:>9.3} {:>8.1} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>9} {:>8.1}{de}",
             f.frame,
             f.cycles,
             f.frame_ms,
@@ -257,6 +258,11 @@ fn print(r: &SequenceReport) -> Result<(), Error> {
             opt(f.weber_max.map(|x| format!("{:.3}", x))),
             f.reused_stages,
             f.emulated_stages,
+            format!(
+                "{}/{}",
+                f.tile_rows_emulated,
+                f.tile_rows_emulated + f.tile_rows_reused
+            ),
             f.wall_ms
         );
     }
@@ -329,5 +335,21 @@ fn print(r: &SequenceReport) -> Result<(), Error> {
             ""
         }
     );
+    match &u.tile_rows_off {
+        Some(why) => outln!("tile rows: not reused: {why}"),
+        None => {
+            let all = u.tile_rows_emulated + u.tile_rows_reused;
+            outln!(
+                "tile rows ({} rows of {} px; raster, visibility, accumulate): after the first frame {} of {} emulated ({:.1}%), {} reused | wall time of the first frame / median later frame = {:.2}",
+                u.tile_rows,
+                u.tile_size,
+                u.tile_rows_emulated,
+                all,
+                100.0 * u.tile_rows_emulated as f64 / all.max(1) as f64,
+                u.tile_rows_reused,
+                u.first_over_later_wall
+            );
+        }
+    }
     Ok(())
 }
