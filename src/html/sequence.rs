@@ -112,6 +112,19 @@ pub fn page(r: &SequenceReport, apng: Option<(&[u8], u32, u32)>) -> Result<Seque
                 r.reuse.stages_reused, r.reuse.stages_emulated, r.reuse.frames_fully_reused
             ),
         ),
+        (
+            "tile rows after the first frame".into(),
+            match &r.reuse.tile_rows_off {
+                Some(why) => format!("not reused: {why}"),
+                None => format!(
+                    "{} emulated, {} reused ({} rows of {} px per frame)",
+                    r.reuse.tile_rows_emulated,
+                    r.reuse.tile_rows_reused,
+                    r.reuse.tile_rows,
+                    r.reuse.tile_size
+                ),
+            },
+        ),
     ];
     let animation = apng.map(|(bytes, w, h)| Picture {
         title: "the frames, at the sequence's rate".into(),
@@ -237,6 +250,7 @@ pub fn page(r: &SequenceReport, apng: Option<(&[u8], u32, u32)>) -> Result<Seque
         "Weber max",
         "reused",
         "emulated",
+        "tile rows emulated",
     ]
     .map(String::from)
     .to_vec();
@@ -259,6 +273,11 @@ pub fn page(r: &SequenceReport, apng: Option<(&[u8], u32, u32)>) -> Result<Seque
                 opt(f.weber_max, 3),
                 f.reused_stages.to_string(),
                 f.emulated_stages.to_string(),
+                format!(
+                    "{}/{}",
+                    f.tile_rows_emulated,
+                    f.tile_rows_emulated + f.tile_rows_reused
+                ),
             ]
         })
         .collect();
