@@ -10,6 +10,7 @@ mod common;
 use common::reports::same;
 use common::{Rng, hw, random_objects, scene};
 use igemu::config::{FilterKind, HwConfig};
+use igemu::files::TomlFile;
 use igemu::pipeline::{self, Render, render};
 use igemu::scene::Scene;
 use igemu::stage::{Band, RunOptions, StageId};
@@ -129,6 +130,34 @@ fn other_filters_samples_tiles_and_the_depth_ramp_render_the_same_in_bands() {
             let banded = render(s, &h, opts(Some(rows))).unwrap();
             assert_same(&whole, &banded, &format!("{what}, bands of {rows}"));
         }
+    }
+}
+
+#[test]
+fn a_colour_render_runs_every_channel_in_bands() {
+    // Per-channel frame words, so a lane's words reach its own accumulate in each band.
+    let s = Scene::embedded("default-colour").unwrap();
+    let h = HwConfig::from_toml(&TomlFile::from_text(
+        "hw.toml",
+        "[accumulate]\nfilter = \"catmull_rom\"\nframe = [\"UQ12.0\", \"UQ10.0\", \"UQ11.0\"]\n",
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    let whole = render(&s, &h, opts(None)).unwrap();
+    for rows in [16, 40] {
+        let banded = render(&s, &h, opts(Some(rows))).unwrap();
+        assert_eq!(bands_of(&banded), 1);
+        assert_same(&whole, &banded, &format!("default-colour, bands of {rows}"));
+        let (a, b) = (
+            whole.colour.as_ref().unwrap(),
+            banded.colour.as_ref().unwrap(),
+        );
+        for (c, (x, y)) in a.channels.iter().zip(&b.channels).enumerate() {
+            assert!(x.dac == y.dac && x.dac_ref == y.dac_ref, "channel {c}");
+        }
+        assert!(
+            whole.report.colour.is_some(),
+            "the report's channels are compared"
+        );
     }
 }
 

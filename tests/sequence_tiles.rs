@@ -187,8 +187,45 @@ fn a_moving_sequence_reports_its_tile_rows_and_equals_the_sequence_without_reuse
     }
     assert!(a.reuse.tile_rows_reused > a.reuse.tile_rows_emulated);
     assert!(b.reuse.tile_rows_off.is_some());
-    // A colour sequence does not run in bands: it says so.
-    let colour = flypast_with(|t| t.replacen("[image]", "[image]\ncolour = true", 1));
-    let (c, _) = common::run_sequence(&colour, &hw, 0..2, false, true);
-    assert!(c.reuse.tile_rows_off.as_deref().unwrap().contains("colour"));
+}
+
+#[test]
+fn a_colour_sequence_reuses_tile_rows_in_every_channel() {
+    let colour = Scene::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/flypast-colour.toml"
+    ))
+    .unwrap();
+    let sky = flypast_with(|t| {
+        t.replacen("[image]", "[image]\ncolour = true", 1)
+            .replacen("[sequence]", SKY, 1)
+    });
+    let hw = HwConfig::default_config();
+    for scene in [&colour, &sky] {
+        let (a, with) = common::run_sequence(scene, &hw, 2..5, true, true);
+        let (_, without) = common::run_sequence(scene, &hw, 2..5, true, false);
+        assert!(with == without, "{}", scene.name);
+        assert!(a.reuse.tile_rows_off.is_none());
+        assert!(
+            a.reuse.tile_rows_reused > 0,
+            "{}: {:?}",
+            scene.name,
+            a.reuse
+        );
+    }
+    let (reused, emulated) = renders_match(&sky, &hw, 0..3);
+    assert!(reused > emulated, "reused {reused}, emulated {emulated}");
+}
+
+#[test]
+fn a_log_coded_sequence_says_it_reuses_no_tile_row() {
+    let hw = common::hw("log8-logadd", |_| {});
+    let (r, _) = common::run_sequence(&with_sky(), &hw, 0..2, false, true);
+    assert!(
+        r.reuse
+            .tile_rows_off
+            .as_deref()
+            .unwrap()
+            .contains("one band")
+    );
 }

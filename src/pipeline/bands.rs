@@ -250,13 +250,11 @@ impl Merge {
     }
 }
 
-/// What one band gave: each stage's outcome (no taps), the band's frame rows and the
-/// sample rows the next band's filter windows read. A sequence's stage cache keeps it for
-/// the next frame ([`super::Cache::tile_rows`], keyed by [`super::tile_rows::Keys`]).
-pub struct BandResult {
-    /// Each stage of the group's outcome, without taps.
-    outcomes: Vec<Outcome>,
-    /// The band's frame rows (accumulate's output).
+/// One channel lane's accumulate on one band.
+struct LaneBand {
+    /// The accumulate stage's outcome, without taps.
+    outcome: Outcome,
+    /// The band's frame rows.
     frame: Arc<FrameTap>,
     /// Its float frame rows (with a reference).
     float: Option<Arc<Vec<f64>>>,
@@ -266,12 +264,43 @@ pub struct BandResult {
     tail: Option<Tail>,
 }
 
+/// What one band gave: the outcomes (no taps) of the stages before accumulate, and each
+/// channel lane's accumulate: its outcome, frame rows and the sample rows the next band's
+/// filter windows read. A sequence's stage cache keeps it for the next frame
+/// ([`super::Cache::tile_row`], keyed by [`super::tile_rows::Keys`]).
+pub struct BandResult {
+    outcomes: Vec<Outcome>,
+    lanes: Vec<LaneBand>,
+}
+
+/// A channel lane's accumulate: its configuration ([`crate::config::HwConfig::channel`])
+/// and input key (channel 0's is the visibility stage's key).
+pub struct LaneIn {
+    /// The lane's configuration.
+    pub hw: crate::config::HwConfig,
+    /// Its accumulate stage's input key.
+    pub key: u64,
+}
+
+/// One lane's merged accumulate over the bands.
+struct LaneFrame {
+    merge: Merge,
+    frame: Frame,
+    float: Vec<f64>,
+    coding: Option<crate::stage::taps::FrameCoding>,
+    acc: Option<Arc<AnyFixed>>,
+    tail: Option<Tail>,
+}
+
 /// Runs the banded stages `group` (raster, visibility, accumulate in flow order) of `plan`
 /// band by band of `rows` pixel rows on the taps `input`, and returns each stage's merged
 /// outcome: work, signals, tokens, local errors and timings added up over the bands; the
 /// taps after raster and visibility without fragment lists and sample buffers (no stage
-/// keeps a whole-screen one); the whole frame and float frame after accumulate. With a
-/// `cache` that keeps tile rows, a band whose key is in it is not run again.
+/// keeps a whole-screen one); the whole frame and float frame after accumulate. The
+/// accumulate stage runs once per lane of `lanes` (one for grey; R, G, B for colour, each
+/// on its channel's samples): the group's last outcome is lane 0's, the second list holds
+/// the other lanes' (their taps carry their lane's frame). With a `cache` that keeps tile
+/// rows, a band whose key is in it is not run again.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     group: &[StageId],
@@ -280,29 +309,36 @@ pub fn run(
     plan: &Plan,
     opts: RunOptions,
     (memo, pool, cache): (&dyn Memo, &stage::Pool, Option<&Cache>),
-    input_keys: &[u64],
+    (input_keys, lanes): (&[u64], &[LaneIn]),
     input: &Taps,
     rows: u32,
-) -> Result<Vec<Outcome>> {
+) -> Result<(Vec<Outcome>, Vec<Outcome>)> {
     let l = &plan.layout;
     let (width, height) = (l.grid.width, l.grid.height);
     let npix = width as usize * height as usize;
-    let mut frame = Frame {
-        width,
-        height,
-        acc: vec![0; npix],
-        depth: vec![0; npix],
-        coverage: vec![0; npix],
-    };
-    let mut frame_f = if opts.reference {
-        vec![0.0; npix]
-    } else {
-        Vec::new()
-    };
-    let mut coding = None;
-    let mut merged: Vec<Merge> = group.iter().map(|_| Merge::default()).collect();
-    let mut tail: Option<Tail> = None;
-    let mut last_acc: Option<Arc<AnyFixed>> = None;
+    let mut frames: Vec<LaneFrame> = lanes
+        .iter()
+        .map(|_| LaneFrame {
+            merge: Merge::default(),
+            frame: Frame {
+                width,
+                height,
+                acc: vec![0; npix],
+                depth: vec![0; npix],
+                coverage: vec![0; npix],
+            },
+            float: if opts.reference {
+                vec![0.0; npix]
+            } else {
+                Vec::new()
+            },
+            coding: None,
+            acc: None,
+            tail: None,
+        })
+        .collect();
+    let before = group.len() - 1;
+    let mut merged: Vec<Merge> = (0..before).map(|_| Merge::default()).collect();
     let list = bands(rows, height);
     let keys = cache.filter(|c| c.keeps_tile_rows()).map(|_| {
         let names: Vec<&str> = group.iter().map(|g| g.name()).collect();
@@ -317,6 +353,7 @@ pub fn run(
         memo,
         pool,
         input_keys,
+        lanes,
         input,
     };
     let mut all_reused = true;
@@ -326,7 +363,8 @@ pub fn run(
         let next = list
             .get(bi + 1)
             .map(|nb| band_rows(l, nb, bi + 2 == list.len()).read);
-        let run = || one.run(b, &r, tail.as_ref(), next);
+        let tails: Vec<Option<&Tail>> = frames.iter().map(|f| f.tail.as_ref()).collect();
+        let run = || one.run(b, &r, &tails, next);
         let res = match (cache, &keys) {
             (Some(c), Some(k)) => {
                 let touched = l.tiles.band(b.y0, b.y1).touched;
@@ -337,94 +375,113 @@ pub fn run(
             }
             _ => Arc::new(run()?),
         };
-        for ((m, o), &id) in merged.iter_mut().zip(&res.outcomes).zip(group) {
-            m.add(o, id != StageId::Accumulate, b.y0);
+        for (m, o) in merged.iter_mut().zip(&res.outcomes) {
+            m.add(o, true, b.y0);
         }
-        let band = &res.frame;
         let at = b.y0 as usize * width as usize;
-        let len = band.frame.acc.len();
-        frame.acc[at..at + len].copy_from_slice(&band.frame.acc);
-        frame.depth[at..at + len].copy_from_slice(&band.frame.depth);
-        frame.coverage[at..at + len].copy_from_slice(&band.frame.coverage);
-        if let Some(f) = &res.float {
-            frame_f[at..at + len].copy_from_slice(f);
+        for (f, lb) in frames.iter_mut().zip(&res.lanes) {
+            f.merge.add(&lb.outcome, false, b.y0);
+            let band = &lb.frame.frame;
+            let len = band.acc.len();
+            f.frame.acc[at..at + len].copy_from_slice(&band.acc);
+            f.frame.depth[at..at + len].copy_from_slice(&band.depth);
+            f.frame.coverage[at..at + len].copy_from_slice(&band.coverage);
+            if let Some(x) = &lb.float {
+                f.float[at..at + len].copy_from_slice(x);
+            }
+            f.coding = Some(lb.frame.coding.clone());
+            f.acc = Some(lb.acc.clone());
+            f.tail.clone_from(&lb.tail);
         }
-        coding = Some(band.coding.clone());
-        last_acc = Some(res.acc.clone());
-        tail.clone_from(&res.tail);
     }
-    drop(tail);
     if let Some(c) = cache.filter(|c| c.keeps_tile_rows()) {
         c.count_banded(group.len() as u64, all_reused);
     }
     // The taps after each stage: no fragment lists or sample buffers; the whole frame.
     let mut taps = input.clone();
     let mut out = Vec::with_capacity(group.len());
-    for (j, (&id, m)) in group.iter().zip(merged).enumerate() {
-        let mut packs = None;
-        if id == StageId::Accumulate {
-            taps.fixed.frame = Some(Arc::new(FrameTap {
-                frame: std::mem::replace(
-                    &mut frame,
-                    Frame {
-                        width,
-                        height,
-                        acc: Vec::new(),
-                        depth: Vec::new(),
-                        coverage: Vec::new(),
-                    },
-                ),
-                coding: coding.clone().expect("a band ran"),
-            }));
-            taps.float.frame = opts
-                .reference
-                .then(|| Arc::new(std::mem::take(&mut frame_f)));
-            // The memories of the whole frame, packed once.
-            let cx = Cx {
-                scene,
-                hw,
-                layout: l,
-                opts,
-                input_key: input_keys[j],
-                memo,
-                pool,
-            };
-            let st = stage::get(id);
-            let fixed = last_acc.take().expect("a band ran");
-            let cost = st.cost(&cx, &fixed);
-            let images = if opts.pack_check {
-                st.memories(&cx, &fixed, &taps)
-            } else {
-                Vec::new()
-            };
-            packs = Some(pack::check(&cost, &images));
-        }
-        out.push(m.finish(taps.clone(), packs));
+    for m in merged {
+        out.push(m.finish(taps.clone(), None));
     }
-    Ok(out)
+    let mut accs = Vec::with_capacity(lanes.len());
+    for (c, (f, lane)) in frames.into_iter().zip(lanes).enumerate() {
+        let mut t = taps.clone();
+        t.lane = c;
+        t.fixed.frame = Some(Arc::new(FrameTap {
+            frame: f.frame,
+            coding: f.coding.expect("a band ran"),
+        }));
+        t.float.frame = opts.reference.then(|| Arc::new(f.float));
+        // The memories of the whole frame, packed once.
+        let cx = Cx {
+            scene,
+            hw: &lane.hw,
+            layout: l,
+            opts,
+            input_key: lane.key,
+            memo,
+            pool,
+        };
+        let st = stage::get(StageId::Accumulate);
+        let fixed = f.acc.expect("a band ran");
+        let cost = st.cost(&cx, &fixed);
+        let images = if opts.pack_check {
+            st.memories(&cx, &fixed, &t)
+        } else {
+            Vec::new()
+        };
+        let packs = pack::check(&cost, &images);
+        if c == 0 {
+            taps = t.clone();
+        }
+        accs.push(f.merge.finish(t, Some(packs)));
+    }
+    let mut accs = accs.into_iter();
+    out.extend(accs.next());
+    drop(taps);
+    Ok((out, accs.collect()))
 }
 
 /// What every band of one banded run shares.
 struct OneBand<'a> {
     group: &'a [StageId],
     scene: &'a crate::scene::Scene,
+    /// The geometry stages' configuration (every channel's).
     hw: &'a crate::config::HwConfig,
     plan: &'a Plan,
     opts: RunOptions,
     memo: &'a dyn Memo,
     pool: &'a stage::Pool,
     input_keys: &'a [u64],
+    lanes: &'a [LaneIn],
     input: &'a Taps,
 }
 
 impl OneBand<'_> {
-    /// Runs the group on band `b` (its rows `r`), its filter windows reading `tail`'s rows
-    /// before its own; keeps the rows from `next` on for the next band.
+    fn cx<'b>(
+        &'b self,
+        hw: &'b crate::config::HwConfig,
+        layout: &'b Layout,
+        input_key: u64,
+    ) -> Cx<'b> {
+        Cx {
+            scene: self.scene,
+            hw,
+            layout,
+            opts: self.opts,
+            input_key,
+            memo: self.memo,
+            pool: self.pool,
+        }
+    }
+
+    /// Runs the group on band `b` (its rows `r`), each lane's filter windows reading its
+    /// `tails`' rows before its own; keeps the rows from `next` on for the next band.
     fn run(
         &self,
         b: &Band,
         r: &Rows,
-        tail: Option<&Tail>,
+        tails: &[Option<&Tail>],
         next: Option<i64>,
     ) -> Result<BandResult> {
         let l = &self.plan.layout;
@@ -442,77 +499,69 @@ impl OneBand<'_> {
         };
         let mut taps = self.input.clone();
         let mut outcomes = Vec::with_capacity(self.group.len());
-        let mut kept = None;
-        let mut acc = None;
-        for (j, &id) in self.group.iter().enumerate() {
-            let st = stage::get(id);
-            let acc_layout;
-            let layout = if id == StageId::Accumulate {
-                let joined = join(
-                    tail,
-                    r.read,
-                    i64::from(b.y0) * n,
-                    taps.fixed.samples(),
-                    taps.float.samples.as_deref(),
-                );
-                let rows = Region {
-                    y0: b.y0,
-                    y1: b.y1,
-                    ..Region::screen(width, height)
-                };
-                let c = l.region.clip(&rows);
-                let region = if c.is_empty() {
-                    Region::default()
-                } else {
-                    Region {
-                        y0: c.y0 - b.y0,
-                        y1: c.y1 - b.y0,
-                        ..c
-                    }
-                };
-                acc_layout = Layout {
-                    region,
-                    samples: joined.fixed.samples.reg,
-                    tiles: l.tiles.band(b.y0, b.y1),
-                    ..geo.clone()
-                };
-                taps.fixed.samples = Some(joined.fixed.clone());
-                taps.float.samples.clone_from(&joined.float);
-                kept = next.map(|k| joined.from(k));
-                &acc_layout
-            } else {
-                &geo
-            };
-            let cx = Cx {
-                scene: self.scene,
-                hw: self.hw,
-                layout,
-                opts: self.opts,
-                input_key: self.input_keys[j],
-                memo: self.memo,
-                pool: self.pool,
-            };
-            let (o, fixed) = execute_keep(st, &cx, &taps)?;
+        let before = self.group.len() - 1;
+        for (&id, &key) in self.group[..before].iter().zip(self.input_keys) {
+            let (o, _) = execute_keep(stage::get(id), &self.cx(self.hw, &geo, key), &taps)?;
             taps = o.taps;
             outcomes.push(Outcome {
                 taps: Taps::default(),
                 images: Vec::new(),
                 ..o
             });
-            if id == StageId::Accumulate {
-                acc = Some(Arc::new(fixed));
-            }
         }
-        Ok(BandResult {
-            outcomes,
-            frame: taps
-                .fixed
-                .frame
-                .clone()
-                .expect("accumulate wrote the band's frame"),
-            float: taps.float.frame.clone(),
-            acc: acc.expect("the group ends with accumulate"),
-            tail: kept,
-        })
+        let rows = Region {
+            y0: b.y0,
+            y1: b.y1,
+            ..Region::screen(width, height)
+        };
+        let c = l.region.clip(&rows);
+        let region = if c.is_empty() {
+            Region::default()
+        } else {
+            Region {
+                y0: c.y0 - b.y0,
+                y1: c.y1 - b.y0,
+                ..c
+            }
+        };
+        let multi = self.lanes.len() > 1;
+        let mut lanes = Vec::with_capacity(self.lanes.len());
+        for (k, (lane, tail)) in self.lanes.iter().zip(tails).enumerate() {
+            let mut t = if multi { taps.lane(k) } else { taps.clone() };
+            let joined = join(
+                *tail,
+                r.read,
+                i64::from(b.y0) * n,
+                t.fixed.samples(),
+                t.float.samples.as_deref(),
+            );
+            let layout = Layout {
+                region,
+                samples: joined.fixed.samples.reg,
+                tiles: l.tiles.band(b.y0, b.y1),
+                ..geo.clone()
+            };
+            t.fixed.samples = Some(joined.fixed.clone());
+            t.float.samples.clone_from(&joined.float);
+            let st = stage::get(StageId::Accumulate);
+            let (o, fixed) = execute_keep(st, &self.cx(&lane.hw, &layout, lane.key), &t)?;
+            lanes.push(LaneBand {
+                frame: o
+                    .taps
+                    .fixed
+                    .frame
+                    .clone()
+                    .expect("accumulate wrote the band's frame"),
+                float: o.taps.float.frame.clone(),
+                outcome: Outcome {
+                    taps: Taps::default(),
+                    images: Vec::new(),
+                    ..o
+                },
+                acc: Arc::new(fixed),
+                tail: next.map(|k| joined.from(k)),
+            });
+        }
+        Ok(BandResult { outcomes, lanes })
     }
 }

@@ -2,6 +2,7 @@
 //! every stage result whose key (its own key material chained with its input's key) is in
 //! the cache.
 
+use super::bands::LaneIn;
 use super::cache::Cache;
 use super::plan::Plan;
 use crate::config::HwConfig;
@@ -84,21 +85,21 @@ pub fn run_lanes(
     };
     let order = plan.order();
     let channels = plan.layout.channels;
+    let band_rows = super::bands::rows(plan, opts);
+    // A banded colour run splits into lanes after accumulate (the bands run every lane's).
+    let lanes_from = if band_rows.is_some() {
+        StageId::Accumulate
+    } else {
+        StageId::Visibility
+    };
     let split = if channels > 1 {
         order
             .iter()
-            .position(|&s| s == StageId::Visibility)
+            .position(|&s| s == lanes_from)
             .map_or(order.len(), |v| v + 1)
     } else {
         order.len()
     };
-    let band_rows = super::bands::rows(plan, opts);
-    if channels > 1 && band_rows.is_some() {
-        return Err(crate::error::Error::File(scene.error(
-            "image.width, image.height",
-            "a colour render of a screen this large would run raster, visibility and accumulate in bands of rows, which do not carry channels yet; use a smaller screen or a grey scene",
-        )));
-    }
     let mut run = Runner {
         scene,
         plan,
@@ -108,6 +109,7 @@ pub fn run_lanes(
         pool,
         last,
         band_rows,
+        lane_accs: Vec::new(),
     };
     let mut steps = Vec::with_capacity(order.len());
     let (taps, key, done) = run.stages(hw, &order[..split], taps, plan.key, &mut steps)?;
@@ -115,19 +117,32 @@ pub fn run_lanes(
         return Ok((steps, Vec::new()));
     }
     // The lanes run stage by stage, so that a stage reading every channel's frame finds
-    // them all finished.
-    let mut lanes: Vec<Lane> = (0..channels)
-        .map(|c| Lane {
-            hw: hw.channel(c),
-            taps: taps.lane(c),
-            key: if c == 0 {
-                key
-            } else {
-                Fnv::new().u64(key).str("channel").u64(c as u64).finish()
-            },
+    // them all finished. After a banded run, each lane starts after its accumulate.
+    let banded = std::mem::take(&mut run.lane_accs);
+    let mut lanes: Vec<Lane> = if banded.is_empty() {
+        (0..channels)
+            .map(|c| Lane {
+                hw: hw.channel(c),
+                taps: taps.lane(c),
+                key: lane_key(key, c),
+                steps: Vec::new(),
+            })
+            .collect()
+    } else {
+        std::iter::once(Lane {
+            hw: hw.channel(0),
+            taps,
+            key,
             steps: Vec::new(),
         })
-        .collect();
+        .chain(banded.into_iter().enumerate().map(|(c, step)| Lane {
+            hw: hw.channel(c + 1),
+            taps: step.outcome.taps.clone(),
+            key: step.key,
+            steps: vec![step],
+        }))
+        .collect()
+    };
     for &id in &order[split..] {
         let cx = Cx {
             scene,
@@ -155,6 +170,15 @@ pub fn run_lanes(
     let mut lanes = lanes.into_iter().map(|l| l.steps);
     steps.extend(lanes.next().unwrap_or_default());
     Ok((steps, lanes.collect()))
+}
+
+/// The key channel `c`'s lane starts from after the stage keyed `key`.
+fn lane_key(key: u64, c: usize) -> u64 {
+    if c == 0 {
+        key
+    } else {
+        Fnv::new().u64(key).str("channel").u64(c as u64).finish()
+    }
 }
 
 /// One channel's lane after visibility.
@@ -205,6 +229,8 @@ struct Runner<'a> {
     pool: &'a Pool,
     last: Option<StageId>,
     band_rows: Option<u32>,
+    /// A banded colour run's accumulate steps of channels 1.. (channel 0's is the run's).
+    lane_accs: Vec<Step>,
 }
 
 impl Runner<'_> {
@@ -252,17 +278,52 @@ impl Runner<'_> {
                     ins.push(cx.input_key);
                     keys.push(stage_key(stage::get(g), &cx, cx.input_key, opts));
                 }
-                let outs = super::bands::run(
+                // Accumulate runs once per channel lane, each with its channel's words.
+                let acc = group.len() - 1;
+                let channels = plan.layout.channels;
+                let lanes: Vec<LaneIn> = (0..channels)
+                    .map(|c| LaneIn {
+                        hw: if channels > 1 {
+                            hw.channel(c)
+                        } else {
+                            hw.clone()
+                        },
+                        key: lane_key(ins[acc], c),
+                    })
+                    .collect();
+                let acc_keys: Vec<u64> = lanes
+                    .iter()
+                    .map(|l| {
+                        let cx = Cx {
+                            hw: &l.hw,
+                            input_key: l.key,
+                            ..cx
+                        };
+                        stage_key(stage::get(StageId::Accumulate), &cx, l.key, opts)
+                    })
+                    .collect();
+                keys[acc] = acc_keys[0];
+                let (outs, lane_outs) = super::bands::run(
                     &group,
                     scene,
                     hw,
                     plan,
                     opts,
                     (self.memo, self.pool, self.cache),
-                    &ins,
+                    (&ins, &lanes),
                     &taps,
                     rows,
                 )?;
+                self.lane_accs = lane_outs
+                    .into_iter()
+                    .zip(&acc_keys[1..])
+                    .map(|(o, &k)| Step {
+                        id: StageId::Accumulate,
+                        key: k,
+                        outcome: Arc::new(o),
+                        reused: false,
+                    })
+                    .collect();
                 for ((&g, &gk), o) in group.iter().zip(&keys).zip(outs) {
                     taps = o.taps.clone();
                     key = gk;

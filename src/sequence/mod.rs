@@ -341,18 +341,8 @@ pub fn run(
     };
     let cache = o.reuse.then(Cache::with_tile_rows);
     let tile = hw.cycles.tile;
-    let tile_rows_off = if !o.reuse {
-        Some("reuse is off (--no-reuse)".to_string())
-    } else if scene.image.colour {
-        Some(
-            "a colour plan does not run in bands of tile rows yet: only whole stages are reused"
-                .to_string(),
-        )
-    } else {
-        None
-    };
     // Bands of one tile row (a plan that runs in one band, e.g. a log-add frame, ignores it).
-    let band_rows = (o.reuse && !scene.image.colour).then_some(tile);
+    let band_rows = o.reuse.then_some(tile);
     let opts = |base: RunOptions| RunOptions { band_rows, ..base };
     let emulator = fast::Emulator::new();
     let period_ms = 1e3 / seq.rate_hz;
@@ -444,6 +434,13 @@ pub fn run(
         });
     }
     let wall_s = t_all.elapsed().as_secs_f64();
+    let tile_rows_off = if !o.reuse {
+        Some("reuse is off (--no-reuse)".to_string())
+    } else if cache.as_ref().map_or((0, 0), Cache::tile_row_stats) == (0, 0) {
+        Some("the plan runs in one band (a log-coded frame, or no accumulate stage): only whole stages are reused".to_string())
+    } else {
+        None
+    };
     let n = records.len() as u32;
     let mut sorted: Vec<u64> = records.iter().map(|r| r.cycles).collect();
     sorted.sort_unstable();
