@@ -18,7 +18,7 @@
 //!   from frame to frame (its own flicker at the sequence's rate).
 
 use crate::compare::DisplayModel;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Largest short side of a small or thin object's screen box, pixels.
 pub const SMALL: f64 = 16.0;
@@ -42,7 +42,7 @@ pub struct Window {
 }
 
 /// One small object over the frames.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ObjectFlicker {
     /// Index in `[[object]]`.
     pub object: usize,
@@ -67,7 +67,7 @@ pub struct ObjectFlicker {
 }
 
 /// Per-pixel excess flicker between two consecutive frames.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PairFlicker {
     /// The later frame.
     pub frame: u32,
@@ -80,7 +80,7 @@ pub struct PairFlicker {
 }
 
 /// Temporal dither over the static pixels.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct DitherTemporal {
     /// Pixels whose reference value is the same in every frame.
     pub static_pixels: u64,
@@ -95,7 +95,7 @@ pub struct DitherTemporal {
 }
 
 /// The temporal section of a sequence report.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TemporalReport {
     /// Frame pairs compared.
     pub pairs: u64,
@@ -113,26 +113,48 @@ pub struct TemporalReport {
     pub dither: Option<DitherTemporal>,
 }
 
+/// What the temporal figures are computed from, frame by frame: a shard's part carries it so
+/// that `igemu sequence merge` joins the shards' states ([`TemporalState::join`]) and
+/// computes the figures of the whole run exactly as one run does ([`TemporalState::report`]).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct TemporalState {
+    /// Per pair of consecutive frames.
+    pub pairs: Vec<PairFlicker>,
+    /// Per pair, the excess summed over its pixels (the mean over the run sums these in
+    /// frame order, so that joined shards give the same mean to the last bit).
+    pub pair_sums: Vec<f64>,
+    /// Pixels compared over all pairs.
+    pub pixels: u64,
+    /// The small objects' series (their figures are computed by the report).
+    pub objects: Vec<ObjectFlicker>,
+    /// The temporal dither's per-pixel sums.
+    pub dither: Option<DitherState>,
+}
+
+/// The temporal dither's per-pixel sums over the frames added.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct DitherState {
+    /// The reference's value before the dither in the first frame.
+    pub ideal: Vec<f64>,
+    /// Whether the value changed in a later frame.
+    pub moved: Vec<bool>,
+    /// Sum of the fixed codes.
+    pub sum: Vec<u32>,
+    /// Smallest fixed code.
+    pub lo: Vec<u16>,
+    /// Largest fixed code.
+    pub hi: Vec<u16>,
+    /// Frames added.
+    pub frames: u32,
+}
+
 /// The accumulator of [`TemporalReport`].
 pub struct Temporal {
     lum: Vec<f64>,
     weber: f64,
     width: u32,
     prev: Option<(Vec<u16>, Option<Vec<u16>>)>,
-    pairs: Vec<PairFlicker>,
-    sum: f64,
-    count: u64,
-    objects: Vec<ObjectFlicker>,
-    dither: Option<DitherAcc>,
-}
-
-struct DitherAcc {
-    ideal: Vec<f64>,
-    moved: Vec<bool>,
-    sum: Vec<u32>,
-    lo: Vec<u16>,
-    hi: Vec<u16>,
-    frames: u32,
+    state: TemporalState,
 }
 
 fn ripple(v: &[f64]) -> f64 {
@@ -172,26 +194,26 @@ impl Temporal {
             weber: model.weber,
             width,
             prev: None,
-            pairs: Vec::new(),
-            sum: 0.0,
-            count: 0,
-            objects: objects
-                .into_iter()
-                .map(|(object, kind)| ObjectFlicker {
-                    object,
-                    kind,
-                    ..ObjectFlicker::default()
-                })
-                .collect(),
-            dither: dither.then(|| DitherAcc {
-                ideal: Vec::new(),
-                moved: Vec::new(),
-                sum: Vec::new(),
-                lo: Vec::new(),
-                hi: Vec::new(),
-                frames: 0,
-            }),
+            state: TemporalState {
+                objects: objects
+                    .into_iter()
+                    .map(|(object, kind)| ObjectFlicker {
+                        object,
+                        kind,
+                        ..ObjectFlicker::default()
+                    })
+                    .collect(),
+                dither: dither.then(DitherState::default),
+                ..TemporalState::default()
+            },
         }
+    }
+
+    /// Takes frame `fixed` (and its `reference`) as the frame before the first one added,
+    /// without adding it: the first frame added is then compared with it (a shard's lead-in
+    /// frame, the last frame of the shard before).
+    pub fn prime(&mut self, fixed: &[u16], reference: Option<&[u16]>) {
+        self.prev = Some((fixed.to_vec(), reference.map(<[u16]>::to_vec)));
     }
 
     /// Total luminance above the background and the peak over window `w` of `codes`.
@@ -231,12 +253,12 @@ impl Temporal {
     ) {
         for (k, w) in windows.iter().enumerate() {
             let (t, p) = self.window(fixed, *w);
-            let o = &mut self.objects[k];
+            let o = &mut self.state.objects[k];
             o.total_fixed.push(t);
             o.peak_fixed.push(p);
             if let Some(r) = reference {
                 let (t, p) = self.window(r, *w);
-                let o = &mut self.objects[k];
+                let o = &mut self.state.objects[k];
                 o.total_reference.push(t);
                 o.peak_reference.push(p);
             }
@@ -252,16 +274,16 @@ impl Temporal {
                 sum += e;
                 visible += u64::from(e > 1.0);
             }
-            self.sum += sum;
-            self.count += fixed.len() as u64;
-            self.pairs.push(PairFlicker {
+            self.state.pair_sums.push(sum);
+            self.state.pixels += fixed.len() as u64;
+            self.state.pairs.push(PairFlicker {
                 frame,
                 max_weber: max,
                 mean_weber: sum / fixed.len().max(1) as f64,
                 visible_pixels: visible,
             });
         }
-        if let (Some(d), Some(ideal)) = (&mut self.dither, ideal) {
+        if let (Some(d), Some(ideal)) = (&mut self.state.dither, ideal) {
             if d.frames == 0 {
                 d.ideal = ideal.to_vec();
                 d.moved = vec![false; ideal.len()];
@@ -282,6 +304,78 @@ impl Temporal {
 
     /// The report of the frames added.
     pub fn finish(self) -> TemporalReport {
+        self.state.report(&self.lum, self.weber)
+    }
+
+    /// The report of the frames added and the state it is computed from (a shard's part).
+    pub fn finish_with_state(self) -> (TemporalReport, TemporalState) {
+        let report = self.state.clone().report(&self.lum, self.weber);
+        (report, self.state)
+    }
+}
+
+impl DitherState {
+    /// Adds the sums of the frames after these (`next`, of the same screen).
+    fn join(&mut self, next: DitherState) {
+        if self.frames == 0 {
+            *self = next;
+            return;
+        }
+        if next.frames == 0 {
+            return;
+        }
+        for i in 0..self.ideal.len() {
+            self.moved[i] |= next.moved[i] || next.ideal[i] != self.ideal[i];
+            self.sum[i] += next.sum[i];
+            self.lo[i] = self.lo[i].min(next.lo[i]);
+            self.hi[i] = self.hi[i].max(next.hi[i]);
+        }
+        self.frames += next.frames;
+    }
+
+    /// Whether every per-pixel list has `n` entries.
+    pub fn has_pixels(&self, n: usize) -> bool {
+        [
+            self.moved.len(),
+            self.sum.len(),
+            self.lo.len(),
+            self.hi.len(),
+        ]
+        .iter()
+        .all(|&l| l == self.ideal.len())
+            && (self.frames == 0 || self.ideal.len() == n)
+    }
+}
+
+impl TemporalState {
+    /// Appends the state of the frames right after these (a shard's `next`, whose first
+    /// pair compares its first frame with the last of these): the pairs, the series and the
+    /// dither's sums follow on; a small object is kept only when it is small in `next` too
+    /// (small in every frame, as in one run).
+    pub fn join(&mut self, next: TemporalState) {
+        self.pairs.extend(next.pairs);
+        self.pair_sums.extend(next.pair_sums);
+        self.pixels += next.pixels;
+        let mut later = next.objects;
+        self.objects.retain_mut(|o| {
+            let Some(n) = later.iter_mut().find(|n| n.object == o.object) else {
+                return false;
+            };
+            o.total_fixed.append(&mut n.total_fixed);
+            o.total_reference.append(&mut n.total_reference);
+            o.peak_fixed.append(&mut n.peak_fixed);
+            o.peak_reference.append(&mut n.peak_reference);
+            true
+        });
+        match (&mut self.dither, next.dither) {
+            (Some(d), Some(n)) => d.join(n),
+            (d, n) => *d = d.take().or(n),
+        }
+    }
+
+    /// The figures of the frames added, on the display of luminance table `lum` (per DAC
+    /// code) and Weber fraction `weber`.
+    pub fn report(self, lum: &[f64], weber: f64) -> TemporalReport {
         let reference = !self.pairs.is_empty();
         let objects = self
             .objects
@@ -296,8 +390,7 @@ impl Temporal {
                 o
             })
             .collect();
-        let lum = &self.lum;
-        let weber = self.weber;
+        let code = |c: u16| lum.get(c as usize).copied().unwrap_or(f64::NAN);
         let dither = self.dither.map(|d| {
             let (mut n, mut max, mut sum, mut flick) = (0u64, 0.0f64, 0.0, 0u64);
             for i in 0..d.ideal.len() {
@@ -308,7 +401,7 @@ impl Temporal {
                 let e = (d.sum[i] as f64 / d.frames as f64 - d.ideal[i]).abs();
                 max = max.max(e);
                 sum += e;
-                let (lo, hi) = (lum[d.lo[i] as usize], lum[d.hi[i] as usize]);
+                let (lo, hi) = (code(d.lo[i]), code(d.hi[i]));
                 flick += u64::from(hi - lo > weber * lo);
             }
             DitherTemporal {
@@ -319,11 +412,12 @@ impl Temporal {
                 frames: d.frames,
             }
         });
+        let total = self.pair_sums.iter().fold(0.0, |a, s| a + s);
         TemporalReport {
             pairs: self.pairs.len() as u64,
             max_excess_weber: reference
                 .then(|| self.pairs.iter().map(|p| p.max_weber).fold(0.0, f64::max)),
-            mean_excess_weber: reference.then(|| self.sum / self.count.max(1) as f64),
+            mean_excess_weber: reference.then(|| total / self.pixels.max(1) as f64),
             visible_excess: self.pairs.iter().map(|p| p.visible_pixels).sum(),
             per_pair: self.pairs,
             objects,
