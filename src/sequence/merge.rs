@@ -143,14 +143,15 @@ fn identity(p: &Part) -> Vec<(&'static str, String)> {
     vec![
         ("report.igemu_version", r.igemu_version.clone()),
         ("report.scene", r.scene.clone()),
-        ("scene_key", p.scene_key.clone()),
+        ("report.sequence_frames", r.sequence_frames.to_string()),
+        ("run", format!("{}..{}", p.run[0], p.run[1])),
         ("report.hardware", r.hardware.clone()),
-        ("hardware_key", p.hardware_key.clone()),
         ("report.filter", r.filter.clone()),
         ("report.reference", r.reference.to_string()),
         ("report.reuse.enabled", r.reuse.enabled.to_string()),
-        ("report.sequence_frames", r.sequence_frames.to_string()),
-        ("run", format!("{}..{}", p.run[0], p.run[1])),
+        // The contents last: a difference the names above do not show.
+        ("scene_key", p.scene_key.clone()),
+        ("hardware_key", p.hardware_key.clone()),
     ]
 }
 
