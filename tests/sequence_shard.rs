@@ -273,7 +273,7 @@ fn parts_of_different_runs_are_refused_naming_the_field() {
     let cut = path(&d, "cut.json");
     let text = std::fs::read_to_string(&a[0]).unwrap();
     std::fs::write(&cut, &text[..text.len() / 2]).unwrap();
-    let (code, _, err) = merge_parts(&[cut.clone()], &[]);
+    let (code, _, err) = merge_parts(std::slice::from_ref(&cut), &[]);
     assert_eq!(code, 2);
     assert!(
         err.contains(&cut) && err.contains("is not a part file"),
