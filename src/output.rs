@@ -425,15 +425,27 @@ pub struct Apng {
 }
 
 impl Apng {
-    /// An APNG of `frames` frames of `width x height` shown at `rate_hz`, looping.
-    pub fn new(path: &str, width: u32, height: u32, frames: u32, rate_hz: f64) -> Result<Apng> {
+    /// An APNG of `frames` frames of `width x height` shown at `rate_hz`, looping: 8-bit
+    /// grey, or 8-bit RGB when `rgb`.
+    pub fn new(
+        path: &str,
+        width: u32,
+        height: u32,
+        frames: u32,
+        rate_hz: f64,
+        rgb: bool,
+    ) -> Result<Apng> {
         let err = |e: png::EncodingError| Error::Image {
             path: path.into(),
             msg: e.to_string(),
         };
         let buf = Shared::default();
         let mut enc = png::Encoder::new(buf.clone(), width, height);
-        enc.set_color(png::ColorType::Grayscale);
+        enc.set_color(if rgb {
+            png::ColorType::Rgb
+        } else {
+            png::ColorType::Grayscale
+        });
         enc.set_depth(png::BitDepth::Eight);
         enc.set_animated(frames, 0).map_err(err)?;
         // The delay num / den s: exact for rates with two decimals up to 655 Hz.
@@ -448,11 +460,11 @@ impl Apng {
             path: path.into(),
             buf,
             writer,
-            size: width as usize * height as usize,
+            size: width as usize * height as usize * if rgb { 3 } else { 1 },
         })
     }
 
-    /// Adds the next frame (`width x height` grey values, row-major).
+    /// Adds the next frame (`width x height` grey values, or R, G, B triples, row-major).
     pub fn frame(&mut self, data: &[u8]) -> Result<()> {
         assert_eq!(data.len(), self.size, "an APNG frame of the announced size");
         self.writer

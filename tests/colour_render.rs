@@ -444,7 +444,7 @@ fn the_html_report_of_a_colour_render_shows_colour_and_a_grey_one_does_not() {
         assert!(html.contains(&t), "the page lacks {t:?}");
     }
     // Every timed stage has a row, logdomain and dither included: a log-coded frame with
-    // error diffusion (a log-potentiate frame; a log-add one takes no dither).
+    // error diffusion (a log-potentiate frame; log-add with a dither is tests/logadd_dither.rs).
     let mut hl = HwConfig::preset("log8-potentiate").unwrap();
     hl.dither.kind = igemu::config::DitherKind::FloydSteinberg;
     let l = render(&grey, &hl);

@@ -254,6 +254,12 @@ fn every_memory_with_contents_has_an_image_and_the_bits_add_up() {
             "{}",
             c.name
         );
+        // The report's storage total (the sweep's cost axis) holds them too.
+        assert_eq!(
+            c.render.report.storage_bits, k.total_storage_bits,
+            "{}",
+            c.name
+        );
     }
     // The transient memories are really in the plans that have them.
     let all: BTreeSet<&str> = cases()

@@ -773,8 +773,8 @@ fn a_workload_that_cannot_finish_ends() {
 /// Every planned stage has a cycle model: a log-coded render with Floyd-Steinberg times the
 /// log encoder (one code per depth test, chained behind visibility per primitive) and the
 /// error diffusion (one token per row, its pixels one after another); an ordered dither
-/// without depth of field follows gamma tile by tile through a FIFO. (A log-add frame takes
-/// no dither: the hardware file is refused, so the log coding here is log-potentiate.)
+/// without depth of field follows gamma tile by tile through a FIFO. (The log coding here is
+/// log-potentiate; log-add with a dither is tests/logadd_dither.rs.)
 #[test]
 fn logdomain_and_dither_have_cycle_models() {
     let s = Scene::embedded("default-pinhole").expect("embedded");

@@ -515,9 +515,10 @@ fn cli_widths_scene_validates_by_emulation() {
 /// A thin lens after a log-coded frame: the DoF stage potentiates the frame through a LUT of
 /// `round(W * log_gamma_linear(a))` entries into the linear frame format, blurs it, and the
 /// gamma stage then reads a linear frame (its linear LUT, not eq. 15). On both Fig. 3 scenes
-/// over 85 % of the codes equal the float reference's and 99.9 % are within one code. Dither stays refused.
+/// over 85 % of the codes equal the float reference's and 99.9 % are within one code. A dither after the
+/// LUT reads that linear frame; before the LUT it is refused.
 #[test]
-fn log_add_with_depth_of_field_potentiates_the_frame_and_refuses_dither() {
+fn log_add_with_depth_of_field_potentiates_the_frame_and_refuses_a_dither_before_the_lut() {
     use igemu::stage::StageId;
     let hw = igemu::config::HwConfig::preset("log8-logadd").unwrap();
     let opts = igemu::stage::RunOptions::FAST;
@@ -573,10 +574,14 @@ fn log_add_with_depth_of_field_potentiates_the_frame_and_refuses_dither() {
         assert!(c.identical_fraction > 0.85, "{name}: {c:?}");
         assert!(near as f64 > 0.999 * c.count as f64, "{name}: {c:?}");
     }
+    // A dither after the LUT is valid (the frame is potentiated, so the LUT is linear);
+    // before the LUT it is refused for log-add, naming the placement.
     let mut hw = hw;
     hw.dither.kind = DitherKind::Bayer4;
+    assert!(hw.validate().is_ok());
+    hw.dither.placement = igemu::config::Placement::BeforeLut;
     let (field, _) = hw.validate().unwrap_err();
-    assert_eq!(field, "dither.kind");
+    assert_eq!(field, "dither.placement");
 }
 
 /// The old (pre-quantiser) ROM formulas, written out: `f64::round` / `f64::ceil` casts.

@@ -7,7 +7,7 @@ use igemu::config::{FilterKind, HwConfig};
 use igemu::files::TomlFile;
 use igemu::pipeline::{self, fast};
 use igemu::scene::{Interpolation, Object, Scene};
-use igemu::sequence::{self, FrameImages, SequenceOptions, SequenceReport};
+use igemu::sequence::SequenceReport;
 use igemu::stage::RunOptions;
 use std::process::Command;
 
@@ -30,18 +30,13 @@ fn run(
     reference: bool,
     reuse: bool,
 ) -> (SequenceReport, Vec<Vec<u16>>) {
-    let mut codes = Vec::new();
-    let o = SequenceOptions {
-        frames,
-        reference,
-        reuse,
-    };
-    let mut keep = |f: &FrameImages| {
-        codes.push(f.fixed.to_vec());
-        Ok(())
-    };
-    let r = sequence::run(scene, hw, &o, &mut keep).expect("sequence runs");
-    (r, codes)
+    let (r, kept) = common::run_sequence(scene, hw, frames, reference, reuse);
+    (
+        r,
+        kept.into_iter()
+            .map(|(mut f, _)| f.swap_remove(0))
+            .collect(),
+    )
 }
 
 fn still_flypast(frames: u32) -> Scene {

@@ -88,7 +88,8 @@ pub struct ChannelReport {
     pub contours: ContourReport,
     /// Overflows over the signals of the channel's lane.
     pub overflows: u64,
-    /// Storage bits (RAM) of the channel's lane.
+    /// Storage bits (RAM) of the channel's lane, its streamed depth of field's line
+    /// buffers included.
     pub storage_bits: u64,
     /// Cycles of a frame through the geometry stages and this channel's lane (the cycle
     /// model on the lane's own tokens).
@@ -182,6 +183,8 @@ pub fn channel(
         None => std::sync::Arc::new(simulate()),
     };
     let (overflows, storage_bits, lut_bits) = lane_totals(&stages);
+    // The lane's streamed depth of field has its own line buffers.
+    let storage_bits = storage_bits + workload.line_buffer_bits();
     let report = ChannelReport {
         name: NAMES[c],
         frame: hw.accumulate.frame.format.to_string(),

@@ -29,7 +29,8 @@ pub struct FastChannel {
     pub dac_bits: u32,
     /// Overflows over the signals of the channel's lane.
     pub overflows: u64,
-    /// Storage bits (RAM) of the channel's lane.
+    /// Storage bits (RAM) of the channel's lane, its streamed depth of field's line buffers
+    /// included.
     pub storage_bits: u64,
     /// LUT / ROM bits of the channel's lane.
     pub lut_bits: u64,
@@ -165,7 +166,7 @@ fn emulate_on_pool(
     super::check_memory(scene, &plan, opts)?;
     let (steps, lanes) = run::run_lanes(scene, hw, &plan, opts, cache, None, pool)?;
     let hw0 = hw.channel(0);
-    let t = totals(scene, &hw0, &plan, (&steps, &lanes), cache);
+    let t = totals(scene, hw, &plan, (&steps, &lanes), cache);
     // Channel 0's lane (a grey run's steps are all its own).
     let split = lanes.first().map_or(0, |l| steps.len() - l.len());
     let lane = |c: usize| -> &[Step] {
@@ -184,6 +185,8 @@ fn emulate_on_pool(
                 let h = hw.channel(c);
                 let stages = lane(c).iter().map(|s| &s.outcome.report);
                 let (overflows, storage_bits, lut_bits) = lane_totals(stages);
+                // The lane's streamed depth of field has its own line buffers.
+                let storage_bits = storage_bits + t.lane_line_bits[c];
                 FastChannel {
                     name: NAMES[c],
                     frame: h.accumulate.frame.format.to_string(),

@@ -167,7 +167,7 @@ fn render_on_pool(
     let ideal = report::ideal(scene, &hw0, &steps, cache);
     let (mut report, workload, contour_map) = report::build(
         scene,
-        &hw0,
+        hw,
         &plan,
         (&steps, &lanes),
         &dac,
@@ -176,7 +176,6 @@ fn render_on_pool(
         cache,
         opts,
     );
-    report.hardware = hw.clone();
     let colour = (channels > 1).then(|| {
         let split = steps.len() - lanes[0].len();
         let mut codes = Vec::with_capacity(channels);

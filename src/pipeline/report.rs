@@ -79,7 +79,7 @@ pub struct Report {
     pub end_to_end: EndToEnd,
     /// Overflows over all signals.
     pub overflows: u64,
-    /// Total storage bits (RAM).
+    /// Total storage bits (RAM), the streamed depth of field's line buffers included.
     pub storage_bits: u64,
     /// Total LUT / ROM bits.
     pub lut_bits: u64,
@@ -190,9 +190,11 @@ fn cached_sim(w: &Workload, cache: Option<&Cache>) -> Arc<(SimResult, f64)> {
 pub(super) struct Totals {
     /// Channel 0's stage reports, in run order.
     pub stages: Vec<StageReport>,
+    /// Each channel's streamed depth-of-field line-buffer bits (one entry for grey).
+    pub lane_line_bits: Vec<u64>,
     /// Overflows over every lane's signals.
     pub overflows: u64,
-    /// RAM bits of every lane.
+    /// RAM bits of every lane, with the streamed depth of field's line buffers.
     pub storage_bits: u64,
     /// ROM / LUT bits of every lane.
     pub lut_bits: u64,
@@ -205,13 +207,16 @@ pub(super) struct Totals {
 }
 
 /// The [`Totals`] of a run's steps.
+/// The totals of a run on `full` (every channel's widths; channel 0's steps run on
+/// `full.channel(0)`).
 pub(super) fn totals(
     scene: &Scene,
-    hw: &HwConfig,
+    full: &HwConfig,
     plan: &Plan,
     (steps, lanes): (&[Step], &[Vec<Step>]),
     cache: Option<&Cache>,
 ) -> Totals {
+    let hw = &full.channel(0);
     let stages: Vec<StageReport> = steps.iter().map(|s| s.outcome.report.clone()).collect();
     // Totals over every channel's lane.
     let every: Vec<&Step> = steps.iter().chain(lanes.iter().flatten()).collect();
@@ -221,7 +226,6 @@ pub(super) fn totals(
         .flat_map(|s| &s.signals)
         .map(|s| s.overflows)
         .sum();
-    let storage_bits = all.iter().map(|s| s.cost.storage_bits).sum();
     let lut_bits = all.iter().map(|s| s.cost.lut_bits).sum();
     let packed = every
         .iter()
@@ -237,19 +241,32 @@ pub(super) fn totals(
     let sim = cached_sim(&workload, cache);
     let (sim, wall) = (&sim.0, sim.1);
     let other_sim = cached_sim(&other, cache);
+    // Every channel's lane streams its own depth of field, its line buffers as wide as
+    // its own frame word.
+    let geometry = steps
+        .iter()
+        .position(|s| s.id == StageId::Visibility)
+        .map_or(&steps[..0], |v| &steps[..=v]);
+    let lane_line_bits: Vec<u64> = std::iter::once(workload.line_buffer_bits())
+        .chain(lanes.iter().enumerate().map(|(c, l)| {
+            if !l.iter().any(|s| s.id == StageId::Dof) {
+                return 0;
+            }
+            let frame: Vec<Step> = geometry.iter().chain(l).cloned().collect();
+            let h = full.channel(c + 1);
+            self::workload(plan, &frame, &h.cycles, h.dof.schedule).line_buffer_bits()
+        }))
+        .collect();
+    let line_bits = lane_line_bits.iter().sum::<u64>();
+    // The storage total holds the streamed schedule's line buffers too (the sweep's cost
+    // axis reads it).
+    let storage_bits = all.iter().map(|s| s.cost.storage_bits).sum::<u64>() + line_bits;
     let cycles = cycles::report(
         &workload,
         plan.order(),
         hw.cycles.clock_mhz,
         scene.display.refresh_hz,
-        // Every channel's lane streams its own depth of field.
-        cost::summarize(&all, packed).with_line_buffers(
-            workload.line_buffer_bits()
-                * (1 + lanes
-                    .iter()
-                    .filter(|l| l.iter().any(|s| s.id == StageId::Dof))
-                    .count() as u64),
-        ),
+        cost::summarize(&all, packed).with_line_buffers(line_bits),
         sim,
         wall,
         (&other, &other_sim.0),
@@ -264,6 +281,7 @@ pub(super) fn totals(
     };
     Totals {
         stages,
+        lane_line_bits,
         overflows,
         storage_bits,
         lut_bits,
@@ -287,7 +305,7 @@ pub(super) fn scene_info(scene: &Scene, plan: &Plan) -> SceneInfo {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build(
     scene: &Scene,
-    hw: &HwConfig,
+    full: &HwConfig,
     plan: &Plan,
     steps_lanes: (&[Step], &[Vec<Step>]),
     dac: &[u16],
@@ -297,15 +315,16 @@ pub(super) fn build(
     opts: crate::stage::RunOptions,
 ) -> (Report, Workload, Vec<u8>) {
     let steps = steps_lanes.0;
+    let hw = &full.channel(0);
     let codes = compare::codes(dac, dac_ref, hw.gamma.dac_bits);
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let weber = compare::weber(dac, dac_ref, &display);
     let contours = perceptual::contours(dac, dac_ref, ideal, &display);
-    let t = totals(scene, hw, plan, steps_lanes, cache);
+    let t = totals(scene, full, plan, steps_lanes, cache);
     let report = Report {
         igemu_version: env!("CARGO_PKG_VERSION").into(),
         scene: scene_info(scene, plan),
-        hardware: hw.clone(),
+        hardware: full.clone(),
         plan: plan.report(scene, hw, opts),
         stages: t.stages,
         reused: steps

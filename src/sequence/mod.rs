@@ -14,6 +14,7 @@ pub mod merge;
 pub mod shard;
 pub mod temporal;
 
+use crate::colour::ColourDisplay;
 use crate::compare::DisplayModel;
 use crate::config::HwConfig;
 use crate::error::Result;
@@ -51,7 +52,8 @@ pub struct FrameRecord {
     pub bottleneck: String,
     /// Whether the frame takes longer than the sequence's period.
     pub misses_period: bool,
-    /// Fraction of DAC codes identical to the reference (with a reference).
+    /// Fraction of DAC codes identical to the reference (with a reference; of all three
+    /// channels' codes for colour, as are the next two figures).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub identical_fraction: Option<f64>,
     /// Largest |fixed - reference| DAC code.
@@ -60,6 +62,12 @@ pub struct FrameRecord {
     /// Largest luminance difference in Weber units.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub weber_max: Option<f64>,
+    /// A colour frame: mean CIEDE2000 of the fixed against the reference image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delta_e_mean: Option<f64>,
+    /// A colour frame: largest CIEDE2000.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delta_e_max: Option<f64>,
     /// Stages whose outcome came from an earlier frame.
     pub reused_stages: u64,
     /// Stages run for this frame.
@@ -153,10 +161,12 @@ pub struct SequenceReport {
 pub struct FrameImages<'a> {
     /// Frame number.
     pub frame: u32,
-    /// Fixed DAC codes, row-major.
-    pub fixed: &'a [u16],
-    /// Reference DAC codes.
-    pub reference: Option<&'a [u16]>,
+    /// Fixed DAC codes, row-major: one plane for a grey sequence, R, G, B for colour.
+    pub fixed: &'a [&'a [u16]],
+    /// Reference DAC codes, the same planes.
+    pub reference: Option<&'a [&'a [u16]]>,
+    /// Each plane's DAC width.
+    pub bits: &'a [u32],
 }
 
 /// The screen box of object `o` in `scene` (a still frame), grown by [`MARGIN`] and cut to
@@ -198,9 +208,59 @@ fn small_window(scene: &Scene, o: usize) -> Option<Window> {
     (win.x1 > win.x0 + 2 && win.y1 > win.y0 + 2).then_some(win)
 }
 
+/// A frame's error figures against its reference.
+#[derive(Clone, Copy)]
+struct Errors {
+    identical: f64,
+    max_abs_diff: u32,
+    weber_max: f64,
+    /// Mean and largest CIEDE2000 (colour).
+    delta_e: Option<(f64, f64)>,
+}
+
+/// The error figures of a render's report: channel 0's (grey), or over the three channels
+/// with the CIEDE2000 (colour).
+fn errors_of(r: &crate::pipeline::Report) -> Errors {
+    let c = &r.end_to_end;
+    let grey = Errors {
+        identical: c.codes.identical_fraction,
+        max_abs_diff: c.codes.max_abs_diff,
+        weber_max: c.weber.max,
+        delta_e: None,
+    };
+    let Some(col) = &r.colour else {
+        return grey;
+    };
+    let n = col.channels.len().max(1) as f64;
+    col.channels.iter().fold(
+        Errors {
+            identical: 0.0,
+            delta_e: Some((col.delta_e.mean, col.delta_e.max)),
+            ..grey
+        },
+        |e, k| Errors {
+            identical: e.identical + k.end_to_end.codes.identical_fraction / n,
+            max_abs_diff: e.max_abs_diff.max(k.end_to_end.codes.max_abs_diff),
+            weber_max: e.weber_max.max(k.end_to_end.weber.max),
+            ..e
+        },
+    )
+}
+
 fn percentile(sorted: &[u64], p: f64) -> u64 {
     let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
     sorted[rank.clamp(1, sorted.len()) - 1]
+}
+
+/// The display model of the temporal figures' DAC codes (the grey channel, or R: the
+/// temporal dither's figures are channel R's).
+pub(crate) fn temporal_model(scene: &Scene, hw: &HwConfig) -> DisplayModel {
+    let bits = if scene.image.colour {
+        hw.channel(0).gamma.dac_bits
+    } else {
+        hw.gamma.dac_bits
+    };
+    DisplayModel::new(&scene.display, bits)
 }
 
 /// Runs frames `o.frames` of `scene`'s sequence on `hw`, handing each frame's images to
@@ -214,9 +274,9 @@ pub fn run(
     run_with_state(scene, hw, o, false, on_frame).map(|(r, _)| r)
 }
 
-/// `scene`'s sequence, when `frames` can run on it: refused without a `[sequence]`, on a
-/// colour scene, and when `frames` is empty or reaches past the sequence (naming the scene
-/// file and `sequence.frames`).
+/// `scene`'s sequence, when `frames` can run on it: refused without a `[sequence]` and when
+/// `frames` is empty or reaches past the sequence (naming the scene file and
+/// `sequence.frames`).
 pub fn check_frames<'a>(scene: &'a Scene, frames: &Range<u32>) -> Result<&'a Sequence> {
     let Some(seq) = &scene.sequence else {
         return Err(scene
@@ -226,14 +286,6 @@ pub fn check_frames<'a>(scene: &'a Scene, frames: &Range<u32>) -> Result<&'a Seq
             )
             .into());
     };
-    if scene.image.colour {
-        return Err(scene
-            .error(
-                "image.colour",
-                "`igemu sequence` runs grey scenes only so far; set colour = false (or give grey intensities) to run this sequence",
-            )
-            .into());
-    }
     if frames.start >= frames.end || frames.end > seq.frames {
         let msg = format!(
             "--frames {}..{} is not a non-empty range within the sequence's frames 0..{}",
@@ -255,77 +307,104 @@ pub(crate) fn run_with_state(
     on_frame: &mut dyn FnMut(&FrameImages) -> Result<()>,
 ) -> Result<(SequenceReport, TemporalState)> {
     let seq = check_frames(scene, &o.frames)?;
-    // The small moving objects: small in every frame run.
-    let frames: Vec<Scene> = o
-        .frames
-        .clone()
-        .map(|f| scene.frame(f))
-        .collect::<std::result::Result<_, _>>()?;
-    let small: Vec<usize> = seq
-        .moving_objects()
-        .into_iter()
-        .filter(|&k| frames.iter().all(|s| small_window(s, k).is_some()))
+    // The small moving objects (small in every frame run) and their windows, from one pass
+    // over the frames' scenes; each frame's scene is made again when it runs, so the
+    // sequence never holds more than one.
+    let moving = seq.moving_objects();
+    let mut windows: Vec<Vec<Option<Window>>> = Vec::with_capacity(o.frames.len());
+    let mut camera_moves = false;
+    let mut camera0 = None;
+    for f in o.frames.clone() {
+        let fs = scene.frame(f)?;
+        windows.push(moving.iter().map(|&k| small_window(&fs, k)).collect());
+        let c0 = camera0.get_or_insert_with(|| fs.camera.clone());
+        camera_moves |= fs.camera != *c0;
+    }
+    let small: Vec<usize> = (0..moving.len())
+        .filter(|&j| windows.iter().all(|w| w[j].is_some()))
         .collect();
     let kinds = small
         .iter()
-        .map(|&k| {
+        .map(|&j| {
+            let k = moving[j];
             let v = serde_json::to_value(&scene.objects[k]).unwrap_or_default();
             (k, v["kind"].as_str().unwrap_or("object").to_string())
         })
         .collect();
-    let model = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let temporal_dither = o.reference && hw.dither.temporal;
-    let mut temporal = Temporal::new(&model, scene.image.width, kinds, temporal_dither);
+    let width = scene.image.width;
+    let mut temporal = if scene.image.colour {
+        let bits = [0, 1, 2].map(|c| hw.channel(c).gamma.dac_bits);
+        let display = ColourDisplay::new(&scene.display, bits);
+        Temporal::colour(&display, scene.display.b_max, width, kinds, temporal_dither)
+    } else {
+        Temporal::new(&temporal_model(scene, hw), width, kinds, temporal_dither)
+    };
     let cache = o.reuse.then(Cache::new);
     let emulator = fast::Emulator::new();
     if lead_in && o.reference && o.frames.start > 0 {
         let (fixed, reference) = shard::lead_in(scene, hw, o.frames.start - 1, cache.as_ref())?;
+        let [fixed, reference] =
+            [&fixed, &reference].map(|p| p.iter().map(Vec::as_slice).collect::<Vec<_>>());
         temporal.prime(&fixed, Some(&reference));
     }
     let period_ms = 1e3 / seq.rate_hz;
-    let mut records = Vec::with_capacity(frames.len());
+    let mut records = Vec::with_capacity(windows.len());
     let t_all = Instant::now();
-    for (f, fs) in o.frames.clone().zip(&frames) {
-        let windows: Vec<Window> = small
-            .iter()
-            .map(|&k| small_window(fs, k).expect("small in every frame"))
-            .collect();
+    for (f, win) in o.frames.clone().zip(&windows) {
+        let fs = scene.frame(f)?;
+        let win: Vec<Window> = small.iter().filter_map(|&j| win[j]).collect();
         let (h0, m0) = cache.as_ref().map_or((0, 0), Cache::stats);
         let t = Instant::now();
-        let (cycles, codes, reference, ideal, errors) = if o.reference {
-            let r = pipeline::render_with(fs, hw, RunOptions::FAST, cache.as_ref())?;
-            let ideal = if temporal_dither {
-                match r.taps(StageId::Gamma).map(|t| t.float.pixels()) {
-                    Some(PixelTapF::Values(v)) => Some(v.clone()),
-                    _ => None,
-                }
-            } else {
-                None
+        // The frame's codes are handed on borrowed: the fixed-only path's planes go back to
+        // the emulator's pool afterwards.
+        let mut consume = |fixed: &[&[u16]],
+                           reference: Option<&[&[u16]]>,
+                           bits: &[u32],
+                           ideal: Option<&[f64]>| {
+            temporal.add(f, fixed, reference, &win, ideal);
+            on_frame(&FrameImages {
+                frame: f,
+                fixed,
+                reference,
+                bits,
+            })
+        };
+        let (cycles, errors) = if o.reference {
+            let r = pipeline::render_with(&fs, hw, RunOptions::FAST, cache.as_ref())?;
+            let ideal = match r.taps(StageId::Gamma).map(|t| t.float.pixels()) {
+                Some(PixelTapF::Values(v)) if temporal_dither => Some(v.as_slice()),
+                _ => None,
             };
-            let c = &r.report.end_to_end;
-            let errors = (
-                c.codes.identical_fraction,
-                c.codes.max_abs_diff,
-                c.weber.max,
-            );
-            (
-                r.report.cycles.clone(),
-                r.dac,
-                Some(r.dac_ref),
-                ideal,
-                Some(errors),
-            )
+            let errors = errors_of(&r.report);
+            match &r.colour {
+                Some(c) => {
+                    let planes = |reference: bool| {
+                        c.channels
+                            .iter()
+                            .map(|k| {
+                                if reference {
+                                    &k.dac_ref[..]
+                                } else {
+                                    &k.dac[..]
+                                }
+                            })
+                            .collect::<Vec<_>>()
+                    };
+                    let bits: Vec<u32> = c.channels.iter().map(|k| k.bits).collect();
+                    consume(&planes(false), Some(&planes(true)), &bits, ideal)?;
+                }
+                None => consume(&[&r.dac], Some(&[&r.dac_ref]), &[r.dac_bits], ideal)?,
+            }
+            (r.report.cycles.clone(), Some(errors))
         } else {
-            let e = emulator.emulate(fs, hw, RunOptions::FIXED_ONLY, cache.as_ref())?;
-            let out = (
-                e.report.cycles.clone(),
-                e.channels[0].clone(),
-                None,
-                None,
-                None,
-            );
+            let e = emulator.emulate(&fs, hw, RunOptions::FIXED_ONLY, cache.as_ref())?;
+            let planes: Vec<&[u16]> = e.channels.iter().map(Vec::as_slice).collect();
+            let done = consume(&planes, None, &e.bits, None);
+            let cycles = e.report.cycles.clone();
             emulator.recycle(e);
-            out
+            done?;
+            (cycles, None)
         };
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
         let (h1, m1) = cache.as_ref().map_or((0, 0), Cache::stats);
@@ -335,12 +414,6 @@ pub(crate) fn run_with_state(
         } else {
             (0, stages)
         };
-        temporal.add(f, &codes, reference.as_deref(), &windows, ideal.as_deref());
-        on_frame(&FrameImages {
-            frame: f,
-            fixed: &codes,
-            reference: reference.as_deref(),
-        })?;
         let th = &cycles.throughput;
         records.push(FrameRecord {
             frame: f,
@@ -349,19 +422,17 @@ pub(crate) fn run_with_state(
             fps: th.fps,
             bottleneck: cycles.bottleneck.clone(),
             misses_period: th.frame_ms > period_ms,
-            identical_fraction: errors.map(|e| e.0),
-            max_abs_diff: errors.map(|e| e.1),
-            weber_max: errors.map(|e| e.2),
+            identical_fraction: errors.map(|e| e.identical),
+            max_abs_diff: errors.map(|e| e.max_abs_diff),
+            weber_max: errors.map(|e| e.weber_max),
+            delta_e_mean: errors.and_then(|e| e.delta_e.map(|d| d.0)),
+            delta_e_max: errors.and_then(|e| e.delta_e.map(|d| d.1)),
             reused_stages: reused,
             emulated_stages: emulated,
             wall_ms,
         });
     }
     let wall_s = t_all.elapsed().as_secs_f64();
-    let camera_moves = !seq.camera.is_empty() && {
-        let c0 = &frames[0].camera;
-        frames.iter().any(|s| s.camera != *c0)
-    };
     let (temporal, state) = temporal.finish_with_state();
     let report = SequenceReport {
         igemu_version: env!("CARGO_PKG_VERSION").to_string(),

@@ -10,7 +10,9 @@
 //! figures are computed from per-frame series the part carries ([`TemporalState`]).
 
 use super::temporal::TemporalState;
-use super::{FrameImages, SequenceOptions, SequenceReport, check_frames, run_with_state};
+use super::{
+    FrameImages, SequenceOptions, SequenceReport, check_frames, run_with_state, temporal_model,
+};
 use crate::compare::DisplayModel;
 use crate::config::HwConfig;
 use crate::error::{FileError, Result};
@@ -47,7 +49,7 @@ pub struct Part {
     pub hardware_key: String,
     /// Key of the camera in the shard's first frame (whether the camera moves over the run).
     pub first_camera: String,
-    /// The display model the temporal figures are computed on.
+    /// The display model the temporal figures' DAC codes are on (the grey channel, or R).
     pub display: DisplayModel,
     /// What the temporal figures are computed from.
     pub temporal: TemporalState,
@@ -77,15 +79,22 @@ fn camera_key(scene: &Scene, f: u32) -> Result<String> {
     Ok(format!("{:016x}", fnv1a(text.as_bytes())))
 }
 
-/// The fixed and reference DAC codes of frame `f` (a shard's lead-in frame).
+/// A frame's DAC codes, row-major: one plane for a grey scene, R, G, B for colour.
+pub(crate) type Planes = Vec<Vec<u16>>;
+
+/// Renders frame `f` of `scene` on `hw` (a shard's lead-in frame): its fixed and reference
+/// [`Planes`].
 pub(crate) fn lead_in(
     scene: &Scene,
     hw: &HwConfig,
     f: u32,
     cache: Option<&Cache>,
-) -> Result<(Vec<u16>, Vec<u16>)> {
+) -> Result<(Planes, Planes)> {
     let r = pipeline::render_with(&scene.frame(f)?, hw, RunOptions::FAST, cache)?;
-    Ok((r.dac, r.dac_ref))
+    Ok(match r.colour {
+        Some(c) => c.channels.into_iter().map(|k| (k.dac, k.dac_ref)).unzip(),
+        None => (vec![r.dac], vec![r.dac_ref]),
+    })
 }
 
 /// Runs shard `shard` of the run `o` (`o.frames` the whole run's frames) and returns its
@@ -121,7 +130,7 @@ pub fn run_shard(
         scene_key: format!("{:016x}", scene_key(scene)),
         hardware_key: format!("{:016x}", hardware_key(hw)),
         first_camera: camera_key(scene, frames.start)?,
-        display: DisplayModel::new(&scene.display, hw.gamma.dac_bits),
+        display: temporal_model(scene, hw),
         temporal,
         report,
     })

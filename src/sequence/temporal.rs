@@ -16,9 +16,17 @@
 //!   sequence, the mean of the fixed codes over the frames against that value (does the
 //!   dither average to it?), and how many of those pixels step by a visible Weber fraction
 //!   from frame to frame (its own flicker at the sequence's rate).
+//!
+//! A colour sequence's luminance is the displayed `Y` of the pixel's R, G, B codes (each
+//! channel's transfer, sRGB primaries, [`ColourDisplay::xyz`]) in cd/m²; its temporal dither
+//! figures are those of channel R.
 
+use crate::colour::ColourDisplay;
 use crate::compare::DisplayModel;
 use serde::{Deserialize, Serialize};
+
+mod state;
+pub use state::{DitherState, TemporalState};
 
 /// Largest short side of a small or thin object's screen box, pixels.
 pub const SMALL: f64 = 16.0;
@@ -113,71 +121,27 @@ pub struct TemporalReport {
     pub dither: Option<DitherTemporal>,
 }
 
-/// What the temporal figures are computed from, frame by frame: a shard's part carries it so
-/// that `igemu sequence merge` joins the shards' states ([`TemporalState::join`]) and
-/// computes the figures of the whole run exactly as one run does ([`TemporalState::report`]).
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct TemporalState {
-    /// Per pair of consecutive frames.
-    pub pairs: Vec<PairFlicker>,
-    /// Per pair, the excess summed over its pixels (the mean over the run sums these in
-    /// frame order, so that joined shards give the same mean to the last bit).
-    pub pair_sums: Vec<f64>,
-    /// Pixels compared over all pairs.
-    pub pixels: u64,
-    /// The small objects' series (their figures are computed by the report).
-    pub objects: Vec<ObjectFlicker>,
-    /// The temporal dither's per-pixel sums.
-    pub dither: Option<DitherState>,
-}
-
-/// The temporal dither's per-pixel sums over the frames added.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct DitherState {
-    /// The reference's value before the dither in the first frame.
-    pub ideal: Vec<f64>,
-    /// Whether the value changed in a later frame.
-    pub moved: Vec<bool>,
-    /// Sum of the fixed codes.
-    pub sum: Vec<u32>,
-    /// Smallest fixed code.
-    pub lo: Vec<u16>,
-    /// Largest fixed code.
-    pub hi: Vec<u16>,
-    /// Frames added.
-    pub frames: u32,
+/// How a frame's codes become displayed luminance.
+enum Light {
+    /// One grey channel: the luminance of each code.
+    Grey,
+    /// R, G, B mixed to `Y` through the colour display, times full white (cd/m²).
+    Colour(Box<ColourDisplay>, f64),
 }
 
 /// The accumulator of [`TemporalReport`].
 pub struct Temporal {
+    light: Light,
+    /// Channel 0's luminance of each code (the grey channel, or R).
     lum: Vec<f64>,
     weber: f64,
     width: u32,
-    prev: Option<(Vec<u16>, Option<Vec<u16>>)>,
+    /// This frame's and the previous frame's luminance, fixed and reference (kept in the
+    /// same buffers from frame to frame).
+    cur: (Vec<f64>, Vec<f64>),
+    prev: Option<(Vec<f64>, Vec<f64>)>,
+    /// What the figures are computed from.
     state: TemporalState,
-}
-
-fn ripple(v: &[f64]) -> f64 {
-    let (lo, hi) = v
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-    let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
-    if mean > 0.0 {
-        100.0 * (hi - lo) / mean
-    } else {
-        0.0
-    }
-}
-
-fn modulation(v: &[f64]) -> f64 {
-    let (lo, hi) = v
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-    if hi > 0.0 {
-        100.0 * (hi - lo) / hi
-    } else {
-        0.0
-    }
 }
 
 impl Temporal {
@@ -189,10 +153,35 @@ impl Temporal {
         objects: Vec<(usize, String)>,
         dither: bool,
     ) -> Self {
+        Self::with_light(Light::Grey, model, width, objects, dither)
+    }
+
+    /// [`Temporal::new`] for R, G, B frames on colour display `display` (full white
+    /// `b_max`, cd/m²); the temporal dither's figures are channel R's.
+    pub fn colour(
+        display: &ColourDisplay,
+        b_max: f64,
+        width: u32,
+        objects: Vec<(usize, String)>,
+        dither: bool,
+    ) -> Self {
+        let light = Light::Colour(Box::new(display.clone()), b_max);
+        Self::with_light(light, display.channel(0), width, objects, dither)
+    }
+
+    fn with_light(
+        light: Light,
+        model: &DisplayModel,
+        width: u32,
+        objects: Vec<(usize, String)>,
+        dither: bool,
+    ) -> Self {
         Self {
+            light,
             lum: model.luminance_table(),
             weber: model.weber,
             width,
+            cur: (Vec::new(), Vec::new()),
             prev: None,
             state: TemporalState {
                 objects: objects
@@ -209,17 +198,42 @@ impl Temporal {
         }
     }
 
-    /// Takes frame `fixed` (and its `reference`) as the frame before the first one added,
-    /// without adding it: the first frame added is then compared with it (a shard's lead-in
-    /// frame, the last frame of the shard before).
-    pub fn prime(&mut self, fixed: &[u16], reference: Option<&[u16]>) {
-        self.prev = Some((fixed.to_vec(), reference.map(<[u16]>::to_vec)));
+    /// The displayed luminance of a frame's planes (one grey plane, or R, G, B) into `out`.
+    fn light(&self, planes: &[&[u16]], out: &mut Vec<f64>) {
+        out.clear();
+        match &self.light {
+            Light::Grey => out.extend(planes[0].iter().map(|&c| self.lum[c as usize])),
+            Light::Colour(d, b_max) => {
+                let [r, g, b] = [0, 1, 2].map(|c| planes[c]);
+                out.extend(
+                    r.iter()
+                        .zip(g)
+                        .zip(b)
+                        .map(|((&r, &g), &b)| d.xyz([r, g, b]).y * b_max),
+                );
+            }
+        }
     }
 
-    /// Total luminance above the background and the peak over window `w` of `codes`.
-    fn window(&self, codes: &[u16], w: Window) -> (f64, f64) {
-        let at = |x: u32, y: u32| codes[(y * self.width + x) as usize];
-        let mut ring: Vec<u16> = Vec::new();
+    /// Takes frame `fixed` (and its `reference`; planes as for [`Temporal::add`]) as the
+    /// frame before the first one added, without adding it: the first frame added is then
+    /// compared with it (a shard's lead-in frame, the last frame of the shard before).
+    pub fn prime(&mut self, fixed: &[&[u16]], reference: Option<&[&[u16]]>) {
+        let (mut lf, mut lr) = self.prev.take().unwrap_or_default();
+        self.light(fixed, &mut lf);
+        lr.clear();
+        if let Some(r) = reference {
+            self.light(r, &mut lr);
+        }
+        self.prev = Some((lf, lr));
+    }
+
+    /// Total luminance above the background and the peak over window `w` of luminance
+    /// plane `lum` (the background: the median of the window's border; a grey plane's
+    /// luminance rises with the code, so that is the median code's).
+    fn window(&self, lum: &[f64], w: Window) -> (f64, f64) {
+        let at = |x: u32, y: u32| lum[(y * self.width + x) as usize];
+        let mut ring: Vec<f64> = Vec::new();
         for y in w.y0..w.y1 {
             for x in w.x0..w.x1 {
                 if y == w.y0 || y + 1 == w.y1 || x == w.x0 || x + 1 == w.x1 {
@@ -227,12 +241,12 @@ impl Temporal {
                 }
             }
         }
-        ring.sort_unstable();
-        let bg = self.lum[ring.get(ring.len() / 2).copied().unwrap_or(0) as usize];
+        ring.sort_unstable_by(f64::total_cmp);
+        let bg = ring.get(ring.len() / 2).copied().unwrap_or(self.lum[0]);
         let (mut total, mut peak) = (0.0, 0.0f64);
         for y in w.y0..w.y1 {
             for x in w.x0..w.x1 {
-                let d = self.lum[at(x, y) as usize] - bg;
+                let d = at(x, y) - bg;
                 total += d;
                 peak = peak.max(d);
             }
@@ -240,49 +254,57 @@ impl Temporal {
         (total, peak)
     }
 
-    /// Adds frame `frame`: its fixed codes, the reference's (if run), each small object's
-    /// window (in the order given to [`Temporal::new`]) and, for a temporal dither, the
-    /// reference's value before the dither (DAC codes as reals).
+    /// Adds frame `frame`: its fixed codes (one grey plane, or R, G, B), the reference's
+    /// (if run), each small object's window (in the order given to [`Temporal::new`]) and,
+    /// for a temporal dither, the reference's value before the dither (DAC codes as reals,
+    /// channel 0).
     pub fn add(
         &mut self,
         frame: u32,
-        fixed: &[u16],
-        reference: Option<&[u16]>,
+        fixed: &[&[u16]],
+        reference: Option<&[&[u16]]>,
         windows: &[Window],
         ideal: Option<&[f64]>,
     ) {
+        let (mut lf, mut lr) = std::mem::take(&mut self.cur);
+        self.light(fixed, &mut lf);
+        if let Some(r) = reference {
+            self.light(r, &mut lr);
+        }
         for (k, w) in windows.iter().enumerate() {
-            let (t, p) = self.window(fixed, *w);
+            let (t, p) = self.window(&lf, *w);
             let o = &mut self.state.objects[k];
             o.total_fixed.push(t);
             o.peak_fixed.push(p);
-            if let Some(r) = reference {
-                let (t, p) = self.window(r, *w);
+            if reference.is_some() {
+                let (t, p) = self.window(&lr, *w);
                 let o = &mut self.state.objects[k];
                 o.total_reference.push(t);
                 o.peak_reference.push(p);
             }
         }
-        if let (Some((pf, Some(pr))), Some(r)) = (&self.prev, reference) {
+        if let (Some((pf, pr)), Some(_)) = (&self.prev, reference)
+            && !pr.is_empty()
+        {
             let (mut max, mut sum, mut visible) = (0.0f64, 0.0, 0u64);
-            for i in 0..fixed.len() {
-                let l = |c: u16| self.lum[c as usize];
-                let df = l(fixed[i]) - l(pf[i]);
-                let dr = l(r[i]) - l(pr[i]);
-                let e = (df - dr).abs() / (self.weber * l(r[i]).max(l(pr[i])));
+            for i in 0..lf.len() {
+                let df = lf[i] - pf[i];
+                let dr = lr[i] - pr[i];
+                let e = (df - dr).abs() / (self.weber * lr[i].max(pr[i]));
                 max = max.max(e);
                 sum += e;
                 visible += u64::from(e > 1.0);
             }
             self.state.pair_sums.push(sum);
-            self.state.pixels += fixed.len() as u64;
+            self.state.pixels += lf.len() as u64;
             self.state.pairs.push(PairFlicker {
                 frame,
                 max_weber: max,
-                mean_weber: sum / fixed.len().max(1) as f64,
+                mean_weber: sum / lf.len().max(1) as f64,
                 visible_pixels: visible,
             });
         }
+        let fixed = fixed[0];
         if let (Some(d), Some(ideal)) = (&mut self.state.dither, ideal) {
             if d.frames == 0 {
                 d.ideal = ideal.to_vec();
@@ -299,7 +321,11 @@ impl Temporal {
             }
             d.frames += 1;
         }
-        self.prev = Some((fixed.to_vec(), reference.map(<[u16]>::to_vec)));
+        if reference.is_none() {
+            lr.clear();
+        }
+        // This frame's planes become the previous frame's, whose buffers the next takes.
+        self.cur = self.prev.replace((lf, lr)).unwrap_or_default();
     }
 
     /// The report of the frames added.
@@ -311,118 +337,6 @@ impl Temporal {
     pub fn finish_with_state(self) -> (TemporalReport, TemporalState) {
         let report = self.state.clone().report(&self.lum, self.weber);
         (report, self.state)
-    }
-}
-
-impl DitherState {
-    /// Adds the sums of the frames after these (`next`, of the same screen).
-    fn join(&mut self, next: DitherState) {
-        if self.frames == 0 {
-            *self = next;
-            return;
-        }
-        if next.frames == 0 {
-            return;
-        }
-        for i in 0..self.ideal.len() {
-            self.moved[i] |= next.moved[i] || next.ideal[i] != self.ideal[i];
-            self.sum[i] += next.sum[i];
-            self.lo[i] = self.lo[i].min(next.lo[i]);
-            self.hi[i] = self.hi[i].max(next.hi[i]);
-        }
-        self.frames += next.frames;
-    }
-
-    /// Whether every per-pixel list has `n` entries.
-    pub fn has_pixels(&self, n: usize) -> bool {
-        [
-            self.moved.len(),
-            self.sum.len(),
-            self.lo.len(),
-            self.hi.len(),
-        ]
-        .iter()
-        .all(|&l| l == self.ideal.len())
-            && (self.frames == 0 || self.ideal.len() == n)
-    }
-}
-
-impl TemporalState {
-    /// Appends the state of the frames right after these (a shard's `next`, whose first
-    /// pair compares its first frame with the last of these): the pairs, the series and the
-    /// dither's sums follow on; a small object is kept only when it is small in `next` too
-    /// (small in every frame, as in one run).
-    pub fn join(&mut self, next: TemporalState) {
-        self.pairs.extend(next.pairs);
-        self.pair_sums.extend(next.pair_sums);
-        self.pixels += next.pixels;
-        let mut later = next.objects;
-        self.objects.retain_mut(|o| {
-            let Some(n) = later.iter_mut().find(|n| n.object == o.object) else {
-                return false;
-            };
-            o.total_fixed.append(&mut n.total_fixed);
-            o.total_reference.append(&mut n.total_reference);
-            o.peak_fixed.append(&mut n.peak_fixed);
-            o.peak_reference.append(&mut n.peak_reference);
-            true
-        });
-        match (&mut self.dither, next.dither) {
-            (Some(d), Some(n)) => d.join(n),
-            (d, n) => *d = d.take().or(n),
-        }
-    }
-
-    /// The figures of the frames added, on the display of luminance table `lum` (per DAC
-    /// code) and Weber fraction `weber`.
-    pub fn report(self, lum: &[f64], weber: f64) -> TemporalReport {
-        let reference = !self.pairs.is_empty();
-        let objects = self
-            .objects
-            .into_iter()
-            .map(|mut o| {
-                o.ripple_fixed_pct = ripple(&o.total_fixed);
-                o.peak_modulation_fixed_pct = modulation(&o.peak_fixed);
-                if !o.total_reference.is_empty() {
-                    o.ripple_reference_pct = Some(ripple(&o.total_reference));
-                    o.peak_modulation_reference_pct = Some(modulation(&o.peak_reference));
-                }
-                o
-            })
-            .collect();
-        let code = |c: u16| lum.get(c as usize).copied().unwrap_or(f64::NAN);
-        let dither = self.dither.map(|d| {
-            let (mut n, mut max, mut sum, mut flick) = (0u64, 0.0f64, 0.0, 0u64);
-            for i in 0..d.ideal.len() {
-                if d.moved[i] {
-                    continue;
-                }
-                n += 1;
-                let e = (d.sum[i] as f64 / d.frames as f64 - d.ideal[i]).abs();
-                max = max.max(e);
-                sum += e;
-                let (lo, hi) = (code(d.lo[i]), code(d.hi[i]));
-                flick += u64::from(hi - lo > weber * lo);
-            }
-            DitherTemporal {
-                static_pixels: n,
-                max_mean_error: max,
-                mean_mean_error: if n > 0 { sum / n as f64 } else { 0.0 },
-                flickering_pixels: flick,
-                frames: d.frames,
-            }
-        });
-        let total = self.pair_sums.iter().fold(0.0, |a, s| a + s);
-        TemporalReport {
-            pairs: self.pairs.len() as u64,
-            max_excess_weber: reference
-                .then(|| self.pairs.iter().map(|p| p.max_weber).fold(0.0, f64::max)),
-            mean_excess_weber: reference.then(|| total / self.pixels.max(1) as f64),
-            visible_excess: self.pairs.iter().map(|p| p.visible_pixels).sum(),
-            per_pair: self.pairs,
-            objects,
-            dither,
-        }
     }
 }
 
@@ -445,15 +359,15 @@ mod tests {
         let mut t = Temporal::new(&model(), 4, vec![], false);
         let a = [10u16, 200, 30, 40];
         let b = [12u16, 180, 30, 90];
-        t.add(0, &a, Some(&a), &[], None);
-        t.add(1, &b, Some(&b), &[], None);
+        t.add(0, &[&a], Some(&[&a]), &[], None);
+        t.add(1, &[&b], Some(&[&b]), &[], None);
         let r = t.finish();
         assert_eq!(r.pairs, 1);
         assert_eq!(r.max_excess_weber, Some(0.0));
         // A pixel the fixed output steps while the reference holds is visible.
         let mut t = Temporal::new(&model(), 4, vec![], false);
-        t.add(0, &a, Some(&a), &[], None);
-        t.add(1, &b, Some(&a), &[], None);
+        t.add(0, &[&a], Some(&[&a]), &[], None);
+        t.add(1, &[&b], Some(&[&a]), &[], None);
         let r = t.finish();
         assert!(r.max_excess_weber.unwrap() > 1.0);
         assert_eq!(r.visible_excess, 3);
@@ -472,7 +386,7 @@ mod tests {
         for k in 0..4u32 {
             f.fill(0);
             f[12 + (k % 2) as usize] = 200;
-            t.add(k, &f, None, &[w], None);
+            t.add(k, &[&f], None, &[w], None);
         }
         let r = t.finish();
         assert_eq!(r.objects[0].ripple_fixed_pct, 0.0);
@@ -482,7 +396,7 @@ mod tests {
         for k in 0..4u32 {
             f.fill(0);
             f[12] = if k % 2 == 0 { 200 } else { 100 };
-            t.add(k, &f, None, &[w], None);
+            t.add(k, &[&f], None, &[w], None);
         }
         let r = t.finish();
         assert!(r.objects[0].ripple_fixed_pct > 50.0);
@@ -494,7 +408,7 @@ mod tests {
         // Value 10.5 dithered as 10, 11, 10, 11; the second pixel moves and is left out.
         for k in 0..4u32 {
             let c = 10 + (k % 2) as u16;
-            t.add(k, &[c, 50], None, &[], Some(&[10.5, 50.0 + k as f64]));
+            t.add(k, &[&[c, 50]], None, &[], Some(&[10.5, 50.0 + k as f64]));
         }
         let d = t.finish().dither.expect("temporal dither");
         assert_eq!(d.static_pixels, 1);

@@ -262,3 +262,31 @@ pub fn run_sweep(
     };
     igemu::sweep::run(configs, scenes, &opts, &|_, _| {}).expect("sweep")
 }
+
+/// One frame of a sequence run: each plane's fixed codes (one for grey, R, G, B for
+/// colour) and the reference's.
+pub type SequenceFrame = (Vec<Vec<u16>>, Option<Vec<Vec<u16>>>);
+
+/// Runs frames `frames` of `scene`'s sequence on `hw`, keeping every frame's planes.
+pub fn run_sequence(
+    scene: &Scene,
+    hw: &HwConfig,
+    frames: std::ops::Range<u32>,
+    reference: bool,
+    reuse: bool,
+) -> (igemu::sequence::SequenceReport, Vec<SequenceFrame>) {
+    let mut kept = Vec::new();
+    let o = igemu::sequence::SequenceOptions {
+        frames,
+        reference,
+        reuse,
+    };
+    let r = igemu::sequence::run(scene, hw, &o, &mut |f| {
+        assert_eq!(f.fixed.len(), f.bits.len());
+        let planes = |p: &[&[u16]]| p.iter().map(|c| c.to_vec()).collect::<Vec<_>>();
+        kept.push((planes(f.fixed), f.reference.map(planes)));
+        Ok(())
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
+    (r, kept)
+}

@@ -7,7 +7,7 @@ use crate::guard::{Inputs, distinct_outputs};
 use crate::out::outln;
 use clap::Args;
 use igemu::error::Error;
-use igemu::output::{Apng, dac_to_u8, diff_values, write_dac, write_file};
+use igemu::output::{Apng, dac_to_u8, diff_values, interleave, write_dac, write_file, write_rgb};
 use igemu::sequence::shard::shard_frames;
 use igemu::sequence::{self, FrameImages, SequenceOptions, SequenceReport};
 use igemu::shard::Shard;
@@ -144,11 +144,11 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
         .sequence
         .as_ref()
         .map_or(scene.display.refresh_hz, |q| q.rate_hz);
-    let bits = hw.gamma.dac_bits;
     let width = if reference { 2 * w } else { w };
+    let rgb = scene.image.colour;
     let mut apng = match a.apng.as_ref().or(a.html.as_ref()) {
-        Some(p) if scene.sequence.is_some() && !scene.image.colour => {
-            Some(Apng::new(p, width, h, frames.len() as u32, rate)?)
+        Some(p) if scene.sequence.is_some() => {
+            Some(Apng::new(p, width, h, frames.len() as u32, rate, rgb)?)
         }
         _ => None,
     };
@@ -159,14 +159,32 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
     };
     let mut on_frame = |fr: &FrameImages| -> Result<(), Error> {
         if let Some(p) = &a.out {
-            write_dac(&numbered(p, fr.frame), fr.fixed, w, h, bits)?;
+            let path = numbered(p, fr.frame);
+            match (fr.fixed, fr.bits) {
+                (&[r, g, b], &[br, bg, bb]) => write_rgb(&path, [r, g, b], [br, bg, bb], w, h)?,
+                _ => write_dac(&path, fr.fixed[0], w, h, fr.bits[0])?,
+            }
         }
         if let Some(ap) = apng.as_mut() {
-            let fixed = dac_to_u8(fr.fixed, bits);
+            // The fixed output beside its difference to the reference (each channel's in
+            // its own colour plane), interleaved per pixel for RGB.
+            let fixed: Vec<Vec<u8>> = fr
+                .fixed
+                .iter()
+                .zip(fr.bits)
+                .map(|(c, &b)| dac_to_u8(c, b))
+                .collect();
+            let fixed = interleave(&fixed);
             let data = match fr.reference {
                 Some(r) => {
-                    let diff = diff_values(fr.fixed, r);
-                    let row = w as usize;
+                    let diff: Vec<Vec<u8>> = fr
+                        .fixed
+                        .iter()
+                        .zip(r)
+                        .map(|(f, r)| diff_values(f, r))
+                        .collect();
+                    let diff = interleave(&diff);
+                    let row = w as usize * fr.fixed.len();
                     fixed
                         .chunks(row)
                         .zip(diff.chunks(row))
@@ -241,8 +259,10 @@ pub(crate) fn print(r: &SequenceReport) -> Result<(), Error> {
             "fixed only"
         }
     );
+    // A colour sequence with a reference adds each frame's CIEDE2000 (mean / largest).
+    let colour = r.frames.iter().any(|f| f.delta_e_max.is_some());
     outln!(
-        "{:>6} {:>10} {:>9} {:>8} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>8}",
+        "{:>6} {:>10} {:>9} {:>8} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>8}{}",
         "frame",
         "cycles",
         "ms",
@@ -253,11 +273,16 @@ pub(crate) fn print(r: &SequenceReport) -> Result<(), Error> {
         "weber",
         "reused",
         "emulated",
-        "wall ms"
+        "wall ms",
+        if colour { "   dE00 mean/max" } else { "" }
     );
     for f in &r.frames {
+        let de = match (f.delta_e_mean, f.delta_e_max) {
+            (Some(m), Some(x)) => format!("  {m:>7.4} {x:>6.2}"),
+            _ => String::new(),
+        };
         outln!(
-            "{:>6} {:>10} {:>9.3} {:>8.1} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>8.1}",
+            "{:>6} {:>10} {:>9.3} {:>8.1} {:>5} {:>10} {:>6} {:>9} {:>7} {:>8} {:>8.1}{de}",
             f.frame,
             f.cycles,
             f.frame_ms,
