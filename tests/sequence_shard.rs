@@ -2,7 +2,8 @@
 //! --shard K/N --part FILE` and `igemu sequence merge`. The merged report equals the
 //! unsharded run's in every field but the wall-clock and reuse counters (the temporal
 //! figures across the shard borders too); missing, overlapping and foreign parts are refused
-//! naming the frames and the files; `--shard auto` takes the shard from a Slurm array task
+//! naming the frames and the files; a colour sequence (R, G, B, the temporal figures on the
+//! luminance `Y`) merges as a grey one; `--shard auto` takes the shard from a Slurm array task
 //! or a Kubernetes indexed Job.
 
 mod common;
@@ -50,9 +51,17 @@ fn json(text: &str) -> Value {
     serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
 }
 
+/// The colour fly-past (`docs/flypast-colour.toml`).
+const COLOUR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/flypast-colour.toml");
+
 /// `igemu sequence flypast --frames RANGE EXTRA... --json`: the report.
 fn unsharded(range: &str, extra: &[&str]) -> Value {
-    let mut args = vec!["sequence", "flypast", "--frames", range, "--json"];
+    unsharded_of("flypast", range, extra)
+}
+
+/// `igemu sequence SCENE --frames RANGE EXTRA... --json`: the report.
+fn unsharded_of(scene: &str, range: &str, extra: &[&str]) -> Value {
+    let mut args = vec!["sequence", scene, "--frames", range, "--json"];
     args.extend(extra);
     let (code, out, err) = igemu(&args, &[]);
     assert_eq!(code, 0, "{err}");
@@ -60,7 +69,8 @@ fn unsharded(range: &str, extra: &[&str]) -> Value {
 }
 
 /// `igemu sequence flypast --frames RANGE --shard SPEC --part d/NAME EXTRA...` with the
-/// shard variables `env`: (exit code, the part's path, stderr).
+/// shard variables `env`: (exit code, the part's path, stderr). An `EXTRA` of
+/// `--scene PATH` runs that scene instead of `flypast`.
 fn shard_run(
     d: &Path,
     range: &str,
@@ -70,7 +80,11 @@ fn shard_run(
     env: &[(&str, &str)],
 ) -> (i32, String, String) {
     let part = path(d, name);
-    let mut args = vec!["sequence", "flypast", "--frames", range, "--shard", spec];
+    let (scene, extra) = match extra {
+        ["--scene", scene, rest @ ..] => (*scene, rest),
+        _ => ("flypast", extra),
+    };
+    let mut args = vec!["sequence", scene, "--frames", range, "--shard", spec];
     args.extend(["--part", &part]);
     args.extend(extra);
     let (code, _, err) = igemu(&args, env);
@@ -171,6 +185,54 @@ fn a_temporal_dither_merges_to_the_unsharded_figures() {
     let dither = full.temporal.dither.as_ref().expect("the temporal dither");
     assert_eq!(dither.frames, 6);
     assert!(dither.static_pixels > 0);
+    let v = |r| without_wall_clock(serde_json::to_value(r).unwrap());
+    assert_eq!(v(&merged), v(&full));
+}
+
+#[test]
+fn a_colour_sequence_in_shards_merges_to_the_unsharded_report() {
+    // R, G, B of every frame; the temporal figures on the luminance Y across the borders.
+    let d = tmp("colour");
+    let full = unsharded_of(COLOUR, "4..10", &[]);
+    let parts = shards(&d, "4..10", 3, &[1, 2, 3], &["--scene", COLOUR]);
+    let p: Value = json(&std::fs::read_to_string(&parts[2]).unwrap());
+    assert_eq!(p["lead_in"], true);
+    let (code, stdout, err) = merge_parts(&parts, &["--json"]);
+    assert_eq!(code, 0, "{err}");
+    let merged = json(&stdout);
+    let t = &full["temporal"];
+    assert_eq!(t["pairs"], 5);
+    assert!(t["max_excess_weber"].as_f64().unwrap() > 0.0);
+    assert!(!t["objects"].as_array().unwrap().is_empty());
+    assert!(full["frames"][0]["delta_e_max"].is_number());
+    assert_eq!(without_wall_clock(merged), without_wall_clock(full));
+}
+
+#[test]
+fn a_colour_temporal_dither_merges_to_the_unsharded_figures() {
+    // Channel R's temporal dither, the pairs and the objects on Y, through the library.
+    let scene = Scene::load(COLOUR).unwrap_or_else(|e| panic!("{e}"));
+    let hw = common::hw("linear8", |h: &mut HwConfig| {
+        h.dither.kind = DitherKind::Bayer4;
+        h.dither.temporal = true;
+    });
+    let o = SequenceOptions {
+        frames: 2..6,
+        reference: true,
+        reuse: false,
+    };
+    let full = sequence::run(&scene, &hw, &o, &mut |_| Ok(())).expect("runs");
+    let parts: Vec<(String, shard::Part)> = (1..=2)
+        .map(|k| {
+            let p = shard::run_shard(&scene, &hw, &o, Shard { k, n: 2 }, &mut |_| Ok(()))
+                .expect("a shard runs");
+            (format!("p{k}"), p)
+        })
+        .collect();
+    let merged = merge::merge(parts).expect("merges");
+    let dither = full.temporal.dither.as_ref().expect("the temporal dither");
+    assert_eq!(dither.frames, 4);
+    assert_eq!(full.temporal.pairs, 3);
     let v = |r| without_wall_clock(serde_json::to_value(r).unwrap());
     assert_eq!(v(&merged), v(&full));
 }
