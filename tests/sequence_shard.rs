@@ -10,7 +10,7 @@ mod common;
 
 use igemu::config::{DitherKind, HwConfig};
 use igemu::scene::Scene;
-use igemu::sequence::{self, SequenceOptions, merge, shard};
+use igemu::sequence::{self, SequenceOptions, SequenceReport, merge, shard};
 use igemu::shard::Shard;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -156,37 +156,54 @@ fn unequal_shards_of_a_fixed_only_run_merge_to_the_unsharded_report() {
     assert_eq!(without_wall_clock(merged), without_wall_clock(full));
 }
 
-#[test]
-fn a_temporal_dither_merges_to_the_unsharded_figures() {
-    // The library: parts written and read back as files, merged, against one run.
-    let scene = Scene::embedded("flypast").expect("embedded");
+/// Frames `frames` of `scene` on `linear8` with a temporal Bayer dither, through the
+/// library: the unsharded report, the merge of its `n` shards (each part written to `d` and
+/// read back) and whether each part has a lead-in frame.
+fn dither_runs(
+    scene: &Scene,
+    frames: std::ops::Range<u32>,
+    n: usize,
+    d: &Path,
+) -> (SequenceReport, SequenceReport, Vec<bool>) {
     let hw = common::hw("linear8", |h: &mut HwConfig| {
         h.dither.kind = DitherKind::Bayer4;
         h.dither.temporal = true;
     });
     let o = SequenceOptions {
-        frames: 1..7,
+        frames,
         reference: true,
         reuse: true,
     };
-    let full = sequence::run(&scene, &hw, &o, &mut |_| Ok(())).expect("runs");
-    let d = tmp("dither");
-    let parts: Vec<(String, shard::Part)> = (1..=3)
+    let full = sequence::run(scene, &hw, &o, &mut |_| Ok(())).expect("runs");
+    let parts: Vec<(String, shard::Part)> = (1..=n)
         .map(|k| {
-            let p = shard::run_shard(&scene, &hw, &o, Shard { k, n: 3 }, &mut |_| Ok(()))
+            let p = shard::run_shard(scene, &hw, &o, Shard { k, n }, &mut |_| Ok(()))
                 .expect("a shard runs");
-            let file = path(&d, &format!("p{k}.json"));
+            let file = path(d, &format!("p{k}.json"));
             std::fs::write(&file, serde_json::to_string(&p).unwrap()).unwrap();
             (file.clone(), merge::read(&file).expect("reads back"))
         })
         .collect();
-    assert!(parts[1].1.lead_in && !parts[0].1.lead_in);
+    let lead_in = parts.iter().map(|(_, p)| p.lead_in).collect();
     let merged = merge::merge(parts).expect("merges");
+    (full, merged, lead_in)
+}
+
+/// A report's JSON without the wall-clock and reuse counters.
+fn value(r: &SequenceReport) -> Value {
+    without_wall_clock(serde_json::to_value(r).unwrap())
+}
+
+#[test]
+fn a_temporal_dither_merges_to_the_unsharded_figures() {
+    // The library: parts written and read back as files, merged, against one run.
+    let scene = Scene::embedded("flypast").expect("embedded");
+    let (full, merged, lead_in) = dither_runs(&scene, 1..7, 3, &tmp("dither"));
+    assert_eq!(lead_in, [false, true, true]);
     let dither = full.temporal.dither.as_ref().expect("the temporal dither");
     assert_eq!(dither.frames, 6);
     assert!(dither.static_pixels > 0);
-    let v = |r| without_wall_clock(serde_json::to_value(r).unwrap());
-    assert_eq!(v(&merged), v(&full));
+    assert_eq!(value(&merged), value(&full));
 }
 
 #[test]
@@ -212,29 +229,13 @@ fn a_colour_sequence_in_shards_merges_to_the_unsharded_report() {
 fn a_colour_temporal_dither_merges_to_the_unsharded_figures() {
     // Channel R's temporal dither, the pairs and the objects on Y, through the library.
     let scene = Scene::load(COLOUR).unwrap_or_else(|e| panic!("{e}"));
-    let hw = common::hw("linear8", |h: &mut HwConfig| {
-        h.dither.kind = DitherKind::Bayer4;
-        h.dither.temporal = true;
-    });
-    let o = SequenceOptions {
-        frames: 2..6,
-        reference: true,
-        reuse: false,
-    };
-    let full = sequence::run(&scene, &hw, &o, &mut |_| Ok(())).expect("runs");
-    let parts: Vec<(String, shard::Part)> = (1..=2)
-        .map(|k| {
-            let p = shard::run_shard(&scene, &hw, &o, Shard { k, n: 2 }, &mut |_| Ok(()))
-                .expect("a shard runs");
-            (format!("p{k}"), p)
-        })
-        .collect();
-    let merged = merge::merge(parts).expect("merges");
+    let (full, merged, lead_in) = dither_runs(&scene, 2..6, 2, &tmp("colour-dither"));
+    assert_eq!(lead_in, [false, true]);
     let dither = full.temporal.dither.as_ref().expect("the temporal dither");
     assert_eq!(dither.frames, 4);
+    assert!(dither.static_pixels > 0);
     assert_eq!(full.temporal.pairs, 3);
-    let v = |r| without_wall_clock(serde_json::to_value(r).unwrap());
-    assert_eq!(v(&merged), v(&full));
+    assert_eq!(value(&merged), value(&full));
 }
 
 #[test]
