@@ -415,4 +415,62 @@ mod tests {
         assert_eq!(d.max_mean_error, 0.0);
         assert_eq!(d.frames, 4);
     }
+
+    #[test]
+    fn a_primed_second_half_joins_to_the_whole_run_in_grey_and_colour() {
+        let display = ColourDisplay::new(&crate::scene::Display::default(), [8, 8, 8]);
+        let m = display.channel(0);
+        let new = |colour: bool| {
+            let objects = vec![(0, "light_point".into())];
+            if colour {
+                Temporal::colour(&display, 100.0, 3, objects, true)
+            } else {
+                Temporal::new(display.channel(0), 3, objects, true)
+            }
+        };
+        let w = Window {
+            x0: 0,
+            y0: 0,
+            x1: 3,
+            y1: 3,
+        };
+        // Frame k: fixed and reference planes (R, G, B; grey uses the first).
+        let frame = |k: u16| {
+            let p = |o: u16| {
+                (0..9)
+                    .map(|i| (i * 29 + k * 37 + o) % 256)
+                    .collect::<Vec<u16>>()
+            };
+            ([p(0), p(5), p(11)], [p(1), p(5), p(9)])
+        };
+        for colour in [false, true] {
+            let n = if colour { 3 } else { 1 };
+            let add = |t: &mut Temporal, k: u16| {
+                let (f, r) = frame(k);
+                let (f, r) = (
+                    f.each_ref().map(Vec::as_slice),
+                    r.each_ref().map(Vec::as_slice),
+                );
+                let ideal: Vec<f64> = r[0].iter().map(|&c| f64::from(c)).collect();
+                t.add(u32::from(k), &f[..n], Some(&r[..n]), &[w], Some(&ideal));
+            };
+            let mut whole = new(colour);
+            (0..5).for_each(|k| add(&mut whole, k));
+            let (mut first, mut second) = (new(colour), new(colour));
+            (0..2).for_each(|k| add(&mut first, k));
+            let (f, r) = frame(1);
+            let (f, r) = (
+                f.each_ref().map(Vec::as_slice),
+                r.each_ref().map(Vec::as_slice),
+            );
+            second.prime(&f[..n], Some(&r[..n]));
+            (2..5).for_each(|k| add(&mut second, k));
+            let mut state = first.finish_with_state().1;
+            state.join(second.finish_with_state().1);
+            let whole = serde_json::to_value(whole.finish()).unwrap();
+            let joined = serde_json::to_value(state.report(&m.luminance_table(), m.weber));
+            assert_eq!(whole["pairs"], 4, "colour {colour}");
+            assert_eq!(joined.unwrap(), whole, "colour {colour}");
+        }
+    }
 }
