@@ -55,7 +55,7 @@ pub fn codes(fixed: &[u16], reference: &[u16], bits: u32) -> CodeCompare {
 }
 
 /// The display: DAC code to luminance.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct DisplayModel {
     /// Stray light, cd/m².
     pub b_min: f64,

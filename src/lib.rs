@@ -40,6 +40,7 @@ pub mod pipeline;
 pub mod rng;
 pub mod scene;
 pub mod sequence;
+pub mod shard;
 pub mod stage;
 pub mod stage_id;
 pub mod sweep;

@@ -11,40 +11,11 @@ use igemu::sweep::grid::Grid;
 use igemu::sweep::merge::{Part, merge};
 use igemu::sweep::{self, Row};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-/// The variables `--shard auto` reads: removed from every run here, so that a test run
-/// inside a Slurm job or a Kubernetes pod sees only what the test sets.
-const SHARD_VARS: &[&str] = &[
-    "SLURM_ARRAY_TASK_ID",
-    "SLURM_ARRAY_TASK_MIN",
-    "SLURM_ARRAY_TASK_MAX",
-    "SLURM_ARRAY_TASK_COUNT",
-    "SLURM_ARRAY_TASK_STEP",
-    "JOB_COMPLETION_INDEX",
-];
-
-/// Runs the binary with `env` as the only shard variables: (exit code, stdout, stderr).
-fn igemu(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_igemu"));
-    c.args(args);
-    for v in SHARD_VARS {
-        c.env_remove(v);
-    }
-    c.envs(env.iter().copied());
-    let o = c.output().expect("run igemu");
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
+use common::igemu_env as igemu;
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("igemu-merge-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+    common::tmp_dir("merge", name)
 }
 
 fn path(d: &Path, name: &str) -> String {

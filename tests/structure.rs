@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 /// Layers, bottom first: a module may import its own layer and the layers below.
 const LAYERS: &[&[&str]] = &[
     &[
-        "error", "fixed", "fnv", "rng", "stage_id", "files", "output",
+        "error", "fixed", "fnv", "rng", "stage_id", "files", "output", "shard",
     ],
     &["scene"],
     &["config"],

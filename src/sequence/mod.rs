@@ -14,6 +14,8 @@
 //! nothing moved reuses every stage. The codes and reports are those of a full emulation
 //! (the cache returns the identical results; `tests/sequence_tiles.rs`).
 
+pub mod merge;
+pub mod shard;
 pub mod temporal;
 
 use crate::colour::ColourDisplay;
@@ -21,12 +23,12 @@ use crate::compare::DisplayModel;
 use crate::config::HwConfig;
 use crate::error::Result;
 use crate::pipeline::{self, Cache, fast};
-use crate::scene::{GuardBand, Primitive, Scene, front_end};
+use crate::scene::{GuardBand, Primitive, Scene, Sequence, front_end};
 use crate::stage::{RunOptions, StageId, taps::PixelTapF};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::ops::Range;
 use std::time::Instant;
-use temporal::{MARGIN, SMALL, THIN, Temporal, TemporalReport, Window};
+use temporal::{MARGIN, SMALL, THIN, Temporal, TemporalReport, TemporalState, Window};
 
 /// What to run.
 #[derive(Clone, Debug)]
@@ -40,7 +42,7 @@ pub struct SequenceOptions {
 }
 
 /// One frame.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FrameRecord {
     /// Frame number.
     pub frame: u32,
@@ -83,7 +85,7 @@ pub struct FrameRecord {
 }
 
 /// The sequence's throughput against its period.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
     /// Frames run.
     pub frames: u32,
@@ -114,7 +116,7 @@ pub struct Summary {
 }
 
 /// Reuse between frames.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ReuseReport {
     /// Whether frames shared a stage cache.
     pub enabled: bool,
@@ -147,7 +149,7 @@ pub struct ReuseReport {
 }
 
 /// The report of `igemu sequence`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SequenceReport {
     /// Tool version.
     pub igemu_version: String,
@@ -282,6 +284,17 @@ fn percentile(sorted: &[u64], p: f64) -> u64 {
     sorted[rank.clamp(1, sorted.len()) - 1]
 }
 
+/// The display model of the temporal figures' DAC codes (the grey channel, or R: the
+/// temporal dither's figures are channel R's).
+pub(crate) fn temporal_model(scene: &Scene, hw: &HwConfig) -> DisplayModel {
+    let bits = if scene.image.colour {
+        hw.channel(0).gamma.dac_bits
+    } else {
+        hw.gamma.dac_bits
+    };
+    DisplayModel::new(&scene.display, bits)
+}
+
 /// Runs frames `o.frames` of `scene`'s sequence on `hw`, handing each frame's images to
 /// `on_frame` as they are made.
 pub fn run(
@@ -290,6 +303,13 @@ pub fn run(
     o: &SequenceOptions,
     on_frame: &mut dyn FnMut(&FrameImages) -> Result<()>,
 ) -> Result<SequenceReport> {
+    run_with_state(scene, hw, o, false, on_frame).map(|(r, _)| r)
+}
+
+/// `scene`'s sequence, when `frames` can run on it: refused without a `[sequence]` and when
+/// `frames` is empty or reaches past the sequence (naming the scene file and
+/// `sequence.frames`).
+pub fn check_frames<'a>(scene: &'a Scene, frames: &Range<u32>) -> Result<&'a Sequence> {
     let Some(seq) = &scene.sequence else {
         return Err(scene
             .error(
@@ -298,13 +318,27 @@ pub fn run(
             )
             .into());
     };
-    if o.frames.start >= o.frames.end || o.frames.end > seq.frames {
+    if frames.start >= frames.end || frames.end > seq.frames {
         let msg = format!(
             "--frames {}..{} is not a non-empty range within the sequence's frames 0..{}",
-            o.frames.start, o.frames.end, seq.frames
+            frames.start, frames.end, seq.frames
         );
         return Err(scene.error("sequence.frames", msg).into());
     }
+    Ok(seq)
+}
+
+/// [`run`], also returning the state the temporal figures are computed from (a shard's
+/// part); with `lead_in` and a reference, frame `o.frames.start - 1` is emulated first,
+/// unreported, so that the first frame's pair is compared as in a run that includes it.
+pub(crate) fn run_with_state(
+    scene: &Scene,
+    hw: &HwConfig,
+    o: &SequenceOptions,
+    lead_in: bool,
+    on_frame: &mut dyn FnMut(&FrameImages) -> Result<()>,
+) -> Result<(SequenceReport, TemporalState)> {
+    let seq = check_frames(scene, &o.frames)?;
     // The small moving objects (small in every frame run) and their windows, from one pass
     // over the frames' scenes; each frame's scene is made again when it runs, so the
     // sequence never holds more than one.
@@ -336,8 +370,7 @@ pub fn run(
         let display = ColourDisplay::new(&scene.display, bits);
         Temporal::colour(&display, scene.display.b_max, width, kinds, temporal_dither)
     } else {
-        let model = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
-        Temporal::new(&model, width, kinds, temporal_dither)
+        Temporal::new(&temporal_model(scene, hw), width, kinds, temporal_dither)
     };
     let cache = o.reuse.then(Cache::with_tile_rows);
     let tile = hw.cycles.tile;
@@ -345,6 +378,12 @@ pub fn run(
     let band_rows = o.reuse.then_some(tile);
     let opts = |base: RunOptions| RunOptions { band_rows, ..base };
     let emulator = fast::Emulator::new();
+    if lead_in && o.reference && o.frames.start > 0 {
+        let (fixed, reference) = shard::lead_in(scene, hw, o.frames.start - 1, cache.as_ref())?;
+        let [fixed, reference] =
+            [&fixed, &reference].map(|p| p.iter().map(Vec::as_slice).collect::<Vec<_>>());
+        temporal.prime(&fixed, Some(&reference));
+    }
     let period_ms = 1e3 / seq.rate_hz;
     let mut records = Vec::with_capacity(windows.len());
     let t_all = Instant::now();
@@ -441,49 +480,8 @@ pub fn run(
     } else {
         None
     };
-    let n = records.len() as u32;
-    let mut sorted: Vec<u64> = records.iter().map(|r| r.cycles).collect();
-    sorted.sort_unstable();
-    let worst = records
-        .iter()
-        .fold(&records[0], |w, r| if r.cycles > w.cycles { r } else { w });
-    let missed = records.iter().filter(|r| r.misses_period).count() as u32;
-    let clock_mhz = hw.cycles.clock_mhz;
-    let summary = Summary {
-        frames: n,
-        rate_hz: seq.rate_hz,
-        clock_mhz,
-        period_cycles: clock_mhz * 1e6 / seq.rate_hz,
-        worst_cycles: worst.cycles,
-        worst_frame: worst.frame,
-        worst_frame_ms: worst.frame_ms,
-        missed,
-        missed_fraction: missed as f64 / n as f64,
-        mean_cycles: sorted.iter().sum::<u64>() as f64 / n as f64,
-        p50_cycles: percentile(&sorted, 50.0),
-        p95_cycles: percentile(&sorted, 95.0),
-        p99_cycles: percentile(&sorted, 99.0),
-    };
-    let reuse = ReuseReport {
-        enabled: o.reuse,
-        camera_moves,
-        frames_fully_reused: records
-            .iter()
-            .skip(1)
-            .filter(|r| r.emulated_stages == 0 && r.tile_rows_emulated == 0)
-            .count() as u32,
-        stages_emulated: records.iter().map(|r| r.emulated_stages).sum(),
-        stages_reused: records.iter().map(|r| r.reused_stages).sum(),
-        tile_rows_off,
-        tile_rows: scene.image.height.div_ceil(tile),
-        tile_size: tile,
-        tile_rows_emulated: records.iter().skip(1).map(|r| r.tile_rows_emulated).sum(),
-        tile_rows_reused: records.iter().skip(1).map(|r| r.tile_rows_reused).sum(),
-        first_over_later_wall: first_over_later(&records),
-        wall_s,
-        frames_per_s: n as f64 / wall_s.max(1e-9),
-    };
-    Ok(SequenceReport {
+    let (temporal, state) = temporal.finish_with_state();
+    let report = SequenceReport {
         igemu_version: env!("CARGO_PKG_VERSION").to_string(),
         scene: scene.name.clone(),
         hardware: hw.name.clone(),
@@ -493,9 +491,70 @@ pub fn run(
         first: o.frames.start,
         sequence_frames: seq.frames,
         reference: o.reference,
+        summary: summarize(&records, seq.rate_hz, hw.cycles.clock_mhz),
+        reuse: reuse_report(
+            (o.reuse, camera_moves),
+            (tile_rows_off, scene.image.height.div_ceil(tile), tile),
+            &records,
+            wall_s,
+        ),
         frames: records,
-        summary,
-        temporal: temporal.finish(),
-        reuse,
-    })
+        temporal,
+    };
+    Ok((report, state))
+}
+
+/// The summary of `records` (at least one) at `rate_hz` and `clock_mhz`.
+pub(crate) fn summarize(records: &[FrameRecord], rate_hz: f64, clock_mhz: f64) -> Summary {
+    let n = records.len() as u32;
+    let mut sorted: Vec<u64> = records.iter().map(|r| r.cycles).collect();
+    sorted.sort_unstable();
+    let worst = records
+        .iter()
+        .fold(&records[0], |w, r| if r.cycles > w.cycles { r } else { w });
+    let missed = records.iter().filter(|r| r.misses_period).count() as u32;
+    Summary {
+        frames: n,
+        rate_hz,
+        clock_mhz,
+        period_cycles: clock_mhz * 1e6 / rate_hz,
+        worst_cycles: worst.cycles,
+        worst_frame: worst.frame,
+        worst_frame_ms: worst.frame_ms,
+        missed,
+        missed_fraction: missed as f64 / n as f64,
+        mean_cycles: sorted.iter().sum::<u64>() as f64 / n as f64,
+        p50_cycles: percentile(&sorted, 50.0),
+        p95_cycles: percentile(&sorted, 95.0),
+        p99_cycles: percentile(&sorted, 99.0),
+    }
+}
+
+/// The reuse of `records`, emulated in `wall_s` seconds: `(enabled, camera_moves)`, and
+/// `(why tile rows are not reused, tile rows per frame, tile size)`.
+pub(crate) fn reuse_report(
+    (enabled, camera_moves): (bool, bool),
+    (tile_rows_off, tile_rows, tile_size): (Option<String>, u32, u32),
+    records: &[FrameRecord],
+    wall_s: f64,
+) -> ReuseReport {
+    ReuseReport {
+        enabled,
+        camera_moves,
+        frames_fully_reused: records
+            .iter()
+            .skip(1)
+            .filter(|r| r.emulated_stages == 0 && r.tile_rows_emulated == 0)
+            .count() as u32,
+        stages_emulated: records.iter().map(|r| r.emulated_stages).sum(),
+        stages_reused: records.iter().map(|r| r.reused_stages).sum(),
+        tile_rows_off,
+        tile_rows,
+        tile_size,
+        tile_rows_emulated: records.iter().skip(1).map(|r| r.tile_rows_emulated).sum(),
+        tile_rows_reused: records.iter().skip(1).map(|r| r.tile_rows_reused).sum(),
+        first_over_later_wall: first_over_later(records),
+        wall_s,
+        frames_per_s: records.len() as f64 / wall_s.max(1e-9),
+    }
 }

@@ -23,7 +23,10 @@
 
 use crate::colour::ColourDisplay;
 use crate::compare::DisplayModel;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+mod state;
+pub use state::{DitherState, TemporalState};
 
 /// Largest short side of a small or thin object's screen box, pixels.
 pub const SMALL: f64 = 16.0;
@@ -47,7 +50,7 @@ pub struct Window {
 }
 
 /// One small object over the frames.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ObjectFlicker {
     /// Index in `[[object]]`.
     pub object: usize,
@@ -72,7 +75,7 @@ pub struct ObjectFlicker {
 }
 
 /// Per-pixel excess flicker between two consecutive frames.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PairFlicker {
     /// The later frame.
     pub frame: u32,
@@ -85,7 +88,7 @@ pub struct PairFlicker {
 }
 
 /// Temporal dither over the static pixels.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct DitherTemporal {
     /// Pixels whose reference value is the same in every frame.
     pub static_pixels: u64,
@@ -100,7 +103,7 @@ pub struct DitherTemporal {
 }
 
 /// The temporal section of a sequence report.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TemporalReport {
     /// Frame pairs compared.
     pub pairs: u64,
@@ -137,43 +140,8 @@ pub struct Temporal {
     /// same buffers from frame to frame).
     cur: (Vec<f64>, Vec<f64>),
     prev: Option<(Vec<f64>, Vec<f64>)>,
-    pairs: Vec<PairFlicker>,
-    sum: f64,
-    count: u64,
-    objects: Vec<ObjectFlicker>,
-    dither: Option<DitherAcc>,
-}
-
-struct DitherAcc {
-    ideal: Vec<f64>,
-    moved: Vec<bool>,
-    sum: Vec<u32>,
-    lo: Vec<u16>,
-    hi: Vec<u16>,
-    frames: u32,
-}
-
-fn ripple(v: &[f64]) -> f64 {
-    let (lo, hi) = v
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-    let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
-    if mean > 0.0 {
-        100.0 * (hi - lo) / mean
-    } else {
-        0.0
-    }
-}
-
-fn modulation(v: &[f64]) -> f64 {
-    let (lo, hi) = v
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-    if hi > 0.0 {
-        100.0 * (hi - lo) / hi
-    } else {
-        0.0
-    }
+    /// What the figures are computed from.
+    state: TemporalState,
 }
 
 impl Temporal {
@@ -215,25 +183,18 @@ impl Temporal {
             width,
             cur: (Vec::new(), Vec::new()),
             prev: None,
-            pairs: Vec::new(),
-            sum: 0.0,
-            count: 0,
-            objects: objects
-                .into_iter()
-                .map(|(object, kind)| ObjectFlicker {
-                    object,
-                    kind,
-                    ..ObjectFlicker::default()
-                })
-                .collect(),
-            dither: dither.then(|| DitherAcc {
-                ideal: Vec::new(),
-                moved: Vec::new(),
-                sum: Vec::new(),
-                lo: Vec::new(),
-                hi: Vec::new(),
-                frames: 0,
-            }),
+            state: TemporalState {
+                objects: objects
+                    .into_iter()
+                    .map(|(object, kind)| ObjectFlicker {
+                        object,
+                        kind,
+                        ..ObjectFlicker::default()
+                    })
+                    .collect(),
+                dither: dither.then(DitherState::default),
+                ..TemporalState::default()
+            },
         }
     }
 
@@ -252,6 +213,19 @@ impl Temporal {
                 );
             }
         }
+    }
+
+    /// Takes frame `fixed` (and its `reference`; planes as for [`Temporal::add`]) as the
+    /// frame before the first one added, without adding it: the first frame added is then
+    /// compared with it (a shard's lead-in frame, the last frame of the shard before).
+    pub fn prime(&mut self, fixed: &[&[u16]], reference: Option<&[&[u16]]>) {
+        let (mut lf, mut lr) = self.prev.take().unwrap_or_default();
+        self.light(fixed, &mut lf);
+        lr.clear();
+        if let Some(r) = reference {
+            self.light(r, &mut lr);
+        }
+        self.prev = Some((lf, lr));
     }
 
     /// Total luminance above the background and the peak over window `w` of luminance
@@ -299,12 +273,12 @@ impl Temporal {
         }
         for (k, w) in windows.iter().enumerate() {
             let (t, p) = self.window(&lf, *w);
-            let o = &mut self.objects[k];
+            let o = &mut self.state.objects[k];
             o.total_fixed.push(t);
             o.peak_fixed.push(p);
             if reference.is_some() {
                 let (t, p) = self.window(&lr, *w);
-                let o = &mut self.objects[k];
+                let o = &mut self.state.objects[k];
                 o.total_reference.push(t);
                 o.peak_reference.push(p);
             }
@@ -321,9 +295,9 @@ impl Temporal {
                 sum += e;
                 visible += u64::from(e > 1.0);
             }
-            self.sum += sum;
-            self.count += lf.len() as u64;
-            self.pairs.push(PairFlicker {
+            self.state.pair_sums.push(sum);
+            self.state.pixels += lf.len() as u64;
+            self.state.pairs.push(PairFlicker {
                 frame,
                 max_weber: max,
                 mean_weber: sum / lf.len().max(1) as f64,
@@ -331,7 +305,7 @@ impl Temporal {
             });
         }
         let fixed = fixed[0];
-        if let (Some(d), Some(ideal)) = (&mut self.dither, ideal) {
+        if let (Some(d), Some(ideal)) = (&mut self.state.dither, ideal) {
             if d.frames == 0 {
                 d.ideal = ideal.to_vec();
                 d.moved = vec![false; ideal.len()];
@@ -356,53 +330,13 @@ impl Temporal {
 
     /// The report of the frames added.
     pub fn finish(self) -> TemporalReport {
-        let reference = !self.pairs.is_empty();
-        let objects = self
-            .objects
-            .into_iter()
-            .map(|mut o| {
-                o.ripple_fixed_pct = ripple(&o.total_fixed);
-                o.peak_modulation_fixed_pct = modulation(&o.peak_fixed);
-                if !o.total_reference.is_empty() {
-                    o.ripple_reference_pct = Some(ripple(&o.total_reference));
-                    o.peak_modulation_reference_pct = Some(modulation(&o.peak_reference));
-                }
-                o
-            })
-            .collect();
-        let lum = &self.lum;
-        let weber = self.weber;
-        let dither = self.dither.map(|d| {
-            let (mut n, mut max, mut sum, mut flick) = (0u64, 0.0f64, 0.0, 0u64);
-            for i in 0..d.ideal.len() {
-                if d.moved[i] {
-                    continue;
-                }
-                n += 1;
-                let e = (d.sum[i] as f64 / d.frames as f64 - d.ideal[i]).abs();
-                max = max.max(e);
-                sum += e;
-                let (lo, hi) = (lum[d.lo[i] as usize], lum[d.hi[i] as usize]);
-                flick += u64::from(hi - lo > weber * lo);
-            }
-            DitherTemporal {
-                static_pixels: n,
-                max_mean_error: max,
-                mean_mean_error: if n > 0 { sum / n as f64 } else { 0.0 },
-                flickering_pixels: flick,
-                frames: d.frames,
-            }
-        });
-        TemporalReport {
-            pairs: self.pairs.len() as u64,
-            max_excess_weber: reference
-                .then(|| self.pairs.iter().map(|p| p.max_weber).fold(0.0, f64::max)),
-            mean_excess_weber: reference.then(|| self.sum / self.count.max(1) as f64),
-            visible_excess: self.pairs.iter().map(|p| p.visible_pixels).sum(),
-            per_pair: self.pairs,
-            objects,
-            dither,
-        }
+        self.state.report(&self.lum, self.weber)
+    }
+
+    /// The report of the frames added and the state it is computed from (a shard's part).
+    pub fn finish_with_state(self) -> (TemporalReport, TemporalState) {
+        let report = self.state.clone().report(&self.lum, self.weber);
+        (report, self.state)
     }
 }
 
@@ -480,5 +414,63 @@ mod tests {
         assert_eq!(d.static_pixels, 1);
         assert_eq!(d.max_mean_error, 0.0);
         assert_eq!(d.frames, 4);
+    }
+
+    #[test]
+    fn a_primed_second_half_joins_to_the_whole_run_in_grey_and_colour() {
+        let display = ColourDisplay::new(&crate::scene::Display::default(), [8, 8, 8]);
+        let m = display.channel(0);
+        let new = |colour: bool| {
+            let objects = vec![(0, "light_point".into())];
+            if colour {
+                Temporal::colour(&display, 100.0, 3, objects, true)
+            } else {
+                Temporal::new(display.channel(0), 3, objects, true)
+            }
+        };
+        let w = Window {
+            x0: 0,
+            y0: 0,
+            x1: 3,
+            y1: 3,
+        };
+        // Frame k: fixed and reference planes (R, G, B; grey uses the first).
+        let frame = |k: u16| {
+            let p = |o: u16| {
+                (0..9)
+                    .map(|i| (i * 29 + k * 37 + o) % 256)
+                    .collect::<Vec<u16>>()
+            };
+            ([p(0), p(5), p(11)], [p(1), p(5), p(9)])
+        };
+        for colour in [false, true] {
+            let n = if colour { 3 } else { 1 };
+            let add = |t: &mut Temporal, k: u16| {
+                let (f, r) = frame(k);
+                let (f, r) = (
+                    f.each_ref().map(Vec::as_slice),
+                    r.each_ref().map(Vec::as_slice),
+                );
+                let ideal: Vec<f64> = r[0].iter().map(|&c| f64::from(c)).collect();
+                t.add(u32::from(k), &f[..n], Some(&r[..n]), &[w], Some(&ideal));
+            };
+            let mut whole = new(colour);
+            (0..5).for_each(|k| add(&mut whole, k));
+            let (mut first, mut second) = (new(colour), new(colour));
+            (0..2).for_each(|k| add(&mut first, k));
+            let (f, r) = frame(1);
+            let (f, r) = (
+                f.each_ref().map(Vec::as_slice),
+                r.each_ref().map(Vec::as_slice),
+            );
+            second.prime(&f[..n], Some(&r[..n]));
+            (2..5).for_each(|k| add(&mut second, k));
+            let mut state = first.finish_with_state().1;
+            state.join(second.finish_with_state().1);
+            let whole = serde_json::to_value(whole.finish()).unwrap();
+            let joined = serde_json::to_value(state.report(&m.luminance_table(), m.weber));
+            assert_eq!(whole["pairs"], 4, "colour {colour}");
+            assert_eq!(joined.unwrap(), whole, "colour {colour}");
+        }
     }
 }

@@ -104,6 +104,42 @@ pub fn hw(preset: &str, f: impl FnOnce(&mut HwConfig)) -> HwConfig {
 #[allow(unused_imports)]
 pub use igemu::rng::Rng;
 
+/// The variables `--shard auto` reads: removed from every run of [`igemu_env`], so that a
+/// test run inside a Slurm job or a Kubernetes pod sees only what the test sets.
+pub const SHARD_VARS: &[&str] = &[
+    "SLURM_ARRAY_TASK_ID",
+    "SLURM_ARRAY_TASK_MIN",
+    "SLURM_ARRAY_TASK_MAX",
+    "SLURM_ARRAY_TASK_COUNT",
+    "SLURM_ARRAY_TASK_STEP",
+    "JOB_COMPLETION_INDEX",
+];
+
+/// Runs the `igemu` binary with `env` as the only shard variables: (exit code, stdout,
+/// stderr).
+pub fn igemu_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_igemu"));
+    c.args(args);
+    for v in SHARD_VARS {
+        c.env_remove(v);
+    }
+    c.envs(env.iter().copied());
+    let o = c.output().expect("run igemu");
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
+}
+
+/// A fresh temporary folder `igemu-PREFIX-PID-NAME`.
+pub fn tmp_dir(prefix: &str, name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("igemu-{prefix}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
 /// Runs the `igemu` binary: (exit code, stdout, stderr).
 pub fn igemu(args: &[&str]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_igemu"))

@@ -374,3 +374,20 @@ pub fn parse_dump(s: &str) -> Result<(DumpTap, String), String> {
     }
     Ok((t, path.to_string()))
 }
+
+/// The shard of `--shard` of `igemu CMD`: `K/N`, or `auto`/`auto/N` from the environment of
+/// a Slurm array task or a Kubernetes indexed Job (then said on stderr).
+pub fn shard_arg(cmd: &str, s: &str) -> Result<igemu::shard::Shard, Error> {
+    let (shard, from) = igemu::shard::Shard::from_arg(s, |v| std::env::var(v).ok())
+        .map_err(|m| arg_error("--shard", m))?;
+    if let Some(from) = from {
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stderr(),
+            "igemu {cmd}: --shard {s}: shard {}/{} from {from}",
+            shard.k,
+            shard.n
+        );
+    }
+    Ok(shard)
+}

@@ -12,6 +12,7 @@ mod args;
 mod cmd;
 mod guard;
 mod print;
+mod with_merge;
 
 use clap::{Parser, Subcommand};
 use igemu::error::Error;
@@ -40,8 +41,8 @@ enum Cmd {
     Dof(cmd::dof::DofArgs),
     /// Cycle-count a frame on the scene's real workload: bottleneck, frame rate, real-time check, cost.
     Cycles(cmd::cycles::CyclesArgs),
-    /// Every frame of an animated scene ([sequence]): cycles per frame against the period, the worst frame, temporal flicker, reuse between frames.
-    Sequence(cmd::sequence::SequenceArgs),
+    /// Every frame of an animated scene ([sequence]): cycles per frame against the period, the worst frame, temporal flicker, reuse between frames; `--shard K/N` runs a block of the frames, `sequence merge` joins the parts.
+    Sequence(cmd::sequence_merge::SequenceCmd),
     /// Small-object flicker: a light point and a thin line swept over 32x32 sub-pixel phases.
     Flicker(cmd::flicker::FlickerArgs),
     /// The accumulate filters side by side: ripple, step ringing, flicker, frequency response, error, cost, MACs, cycles, time.
@@ -78,7 +79,7 @@ fn try_main(cli: Cli) -> Result<ExitCode, Error> {
         Cmd::Widths(a) => cmd::widths::run(a),
         Cmd::Dof(a) => cmd::dof::run(a),
         Cmd::Cycles(a) => cmd::cycles::run(a),
-        Cmd::Sequence(a) => cmd::sequence::run(a),
+        Cmd::Sequence(a) => cmd::sequence_merge::run(a),
         Cmd::Flicker(a) => cmd::flicker::run(a),
         Cmd::Filters(a) => cmd::filters::run(a),
         Cmd::Hdl(c) => cmd::hdl::run(c),

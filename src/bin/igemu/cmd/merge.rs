@@ -5,67 +5,18 @@
 
 use crate::args::{TruthArgs, arg_error};
 use crate::guard::Inputs;
-use clap::{Args, Subcommand};
+use clap::Args;
 use igemu::error::Error;
 use igemu::sweep::{self, merge, pareto};
 use std::io::Write;
 use std::process::ExitCode;
 
-/// `igemu sweep [SCENE]... --grid ...` or `igemu sweep merge PART.jsonl... --grid ...`. The
-/// clap traits are written out: the derive cannot make the sweep's own arguments optional
-/// next to a subcommand (an optional flattened struct with a flattened member is never
-/// found in the matches, clap 4.6).
-pub enum SweepCmd {
-    /// `igemu sweep`.
-    Run(super::sweep::SweepArgs),
-    /// `igemu sweep merge`.
-    Merge(MergeArgs),
-}
-
-#[derive(Subcommand)]
-enum SweepSub {
-    /// Merge the part files of a sharded sweep: check that every row of the grid is there exactly once (else name the missing, duplicated and foreign rows and exit 1), write them in job order, print the Pareto front.
-    Merge(MergeArgs),
-}
-
-impl clap::FromArgMatches for SweepCmd {
-    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
-        Self::from_arg_matches_mut(&mut m.clone())
-    }
-
-    fn from_arg_matches_mut(m: &mut clap::ArgMatches) -> Result<Self, clap::Error> {
-        if m.subcommand_name().is_some_and(SweepSub::has_subcommand) {
-            let SweepSub::Merge(a) = SweepSub::from_arg_matches_mut(m)?;
-            Ok(SweepCmd::Merge(a))
-        } else {
-            super::sweep::SweepArgs::from_arg_matches_mut(m).map(SweepCmd::Run)
-        }
-    }
-
-    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
-        *self = Self::from_arg_matches(m)?;
-        Ok(())
-    }
-}
-
-impl Args for SweepCmd {
-    fn augment_args(c: clap::Command) -> clap::Command {
-        SweepSub::augment_subcommands(super::sweep::SweepArgs::augment_args(c))
-            .args_conflicts_with_subcommands(true)
-            .subcommand_negates_reqs(true)
-    }
-
-    fn augment_args_for_update(c: clap::Command) -> clap::Command {
-        SweepSub::augment_subcommands_for_update(super::sweep::SweepArgs::augment_args_for_update(
-            c,
-        ))
-        .args_conflicts_with_subcommands(true)
-        .subcommand_negates_reqs(true)
-    }
-}
+/// `igemu sweep [SCENE]... --grid ...` or `igemu sweep merge PART.jsonl... --grid ...`.
+pub type SweepCmd = crate::with_merge::WithMerge<super::sweep::SweepArgs, MergeArgs>;
 
 #[derive(Args)]
 #[command(
+    about = "Merge the part files of a sharded sweep: check that every row of the grid is there exactly once (else name the missing, duplicated and foreign rows and exit 1), write them in job order, print the Pareto front",
     mut_arg("dof_truth", |a| a.help("The sweep ran with --dof-truth (its lens-sample count is part of the row ids)")),
     mut_arg("lens_samples", |a| a.help("The sweep's --lens-samples (default 256)"))
 )]

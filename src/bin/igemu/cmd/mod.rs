@@ -13,5 +13,6 @@ pub mod merge;
 pub mod ranges;
 pub mod render;
 pub mod sequence;
+pub mod sequence_merge;
 pub mod sweep;
 pub mod widths;

@@ -8,7 +8,10 @@ use crate::out::outln;
 use clap::Args;
 use igemu::error::Error;
 use igemu::output::{Apng, dac_to_u8, diff_values, interleave, write_dac, write_file, write_rgb};
+use igemu::sequence::shard::shard_frames;
 use igemu::sequence::{self, FrameImages, SequenceOptions, SequenceReport};
+use igemu::shard::Shard;
+use std::io::Write;
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -41,9 +44,16 @@ pub struct SequenceArgs {
     /// Emulate every frame afresh (no stage outcome reused from an earlier frame).
     #[arg(long)]
     pub no_reuse: bool,
+    /// Run only shard K of N of the frames (contiguous blocks of the --frames range, as `sweep --shard`); `auto` takes it from a Slurm array task (SLURM_ARRAY_TASK_ID, _MIN, _COUNT, _STEP), `auto/N` also from a Kubernetes indexed Job (JOB_COMPLETION_INDEX of N). Needs --part.
+    #[arg(long, value_name = "K/N|auto|auto/N", requires = "part")]
+    pub shard: Option<String>,
+    /// Write the shard's part file for `igemu sequence merge` (without --shard: the whole run as shard 1/1).
+    #[arg(long, value_name = "PART.json")]
+    pub part: Option<String>,
 }
 
-/// `A..B`, `A..`, `..B` or `A` within `0..n`.
+/// `A..B`, `A..`, `..B` or `A`, `n` the sequence's frames (the range is checked by
+/// [`sequence::check_frames`]).
 fn frame_range(s: &str, n: u32) -> Result<std::ops::Range<u32>, Error> {
     let bad = || {
         arg_error(
@@ -60,20 +70,13 @@ fn frame_range(s: &str, n: u32) -> Result<std::ops::Range<u32>, Error> {
             t.trim().parse().map_err(|_| bad())
         }
     };
-    let r = match s.split_once("..") {
+    Ok(match s.split_once("..") {
         Some((a, b)) => num(a, 0)?..num(b, n)?,
         None => {
             let a = num(s, 0)?;
             a..a.saturating_add(1)
         }
-    };
-    if r.start >= r.end || r.end > n {
-        return Err(arg_error(
-            "--frames",
-            format!("`{s}` must be a non-empty range within the sequence's frames 0..{n}"),
-        ));
-    }
-    Ok(r)
+    })
 }
 
 /// `out.png` -> `out-0007.png`.
@@ -95,11 +98,25 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
             .map_err(|(field, msg)| hw.error(&field, msg))?;
     }
     let n = scene.sequence.as_ref().map_or(1, |q| q.frames);
-    let frames = match &a.frames {
+    let run_frames = match &a.frames {
         Some(s) => frame_range(s, n)?,
         None => 0..n,
     };
+    sequence::check_frames(&scene, &run_frames)?;
+    let shard = match (&a.shard, &a.part) {
+        (Some(s), _) => Some(crate::args::shard_arg("sequence", s)?),
+        (None, Some(_)) => Some(Shard { k: 1, n: 1 }),
+        (None, None) => None,
+    };
+    let frames = match shard {
+        Some(sh) => shard_frames(&run_frames, sh).map_err(|m| arg_error("--shard", m))?,
+        None => run_frames.clone(),
+    };
     let mut outs: Vec<(&str, String)> = Vec::new();
+    if let Some(p) = &a.part {
+        inputs.check("--part", p)?;
+        outs.push(("--part", p.clone()));
+    }
     if let Some(p) = &a.apng {
         inputs.check("--apng", p)?;
         outs.push(("--apng", p.clone()));
@@ -136,7 +153,7 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
         _ => None,
     };
     let opts = SequenceOptions {
-        frames,
+        frames: run_frames,
         reference,
         reuse: !a.no_reuse,
     };
@@ -180,7 +197,26 @@ pub fn run(a: SequenceArgs) -> Result<ExitCode, Error> {
         }
         Ok(())
     };
-    let r = sequence::run(&scene, &hw, &opts, &mut on_frame)?;
+    let r = match (shard, &a.part) {
+        (Some(sh), Some(path)) => {
+            let part = sequence::shard::run_shard(&scene, &hw, &opts, sh, &mut on_frame)?;
+            let text =
+                serde_json::to_string(&part).map_err(|e| arg_error("--part", e.to_string()))?;
+            write_file(path, text)?;
+            let _ = writeln!(
+                std::io::stderr(),
+                "igemu sequence: shard {}/{}: frames {}..{} of the run's {}..{} -> {path}",
+                sh.k,
+                sh.n,
+                part.frames[0],
+                part.frames[1],
+                part.run[0],
+                part.run[1]
+            );
+            part.report
+        }
+        _ => sequence::run(&scene, &hw, &opts, &mut on_frame)?,
+    };
     let bytes = apng.map(Apng::finish_bytes).transpose()?;
     if let (Some(p), Some(b)) = (&a.apng, &bytes) {
         write_file(p, b)?;
@@ -204,7 +240,7 @@ fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
     v.map_or("-".into(), |x| x.to_string())
 }
 
-fn print(r: &SequenceReport) -> Result<(), Error> {
+pub(crate) fn print(r: &SequenceReport) -> Result<(), Error> {
     let s = &r.summary;
     outln!(
         "sequence `{}` | hardware `{}` | filter {} | {}x{} | frames {}..{} of {} | {} Hz | {}",

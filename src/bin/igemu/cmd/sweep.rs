@@ -68,7 +68,7 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
         ("--html", a.html.as_deref()),
     ])?;
     let shard = match &a.shard {
-        Some(s) => Some(shard_arg(s)?),
+        Some(s) => Some(crate::args::shard_arg("sweep", s)?),
         None => None,
     };
     let given = match &a.axes {
@@ -153,22 +153,6 @@ pub fn run(a: SweepArgs) -> Result<ExitCode, Error> {
     }
     crate::print::print_front(rows, &axes)?;
     Ok(ExitCode::SUCCESS)
-}
-
-/// The shard of `--shard`: `K/N`, or `auto`/`auto/N` from the environment of a Slurm array
-/// task or a Kubernetes indexed Job (then said on stderr).
-fn shard_arg(s: &str) -> Result<igemu::sweep::grid::Shard, Error> {
-    let (shard, from) = igemu::sweep::grid::Shard::from_arg(s, |v| std::env::var(v).ok())
-        .map_err(|m| arg_error("--shard", m))?;
-    if let Some(from) = from {
-        let _ = writeln!(
-            std::io::stderr(),
-            "igemu sweep: --shard {s}: shard {}/{} from {from}",
-            shard.k,
-            shard.n
-        );
-    }
-    Ok(shard)
 }
 
 /// The axes of the front: those of `--axes` (`given`), else [`igemu::sweep::pareto::default_axes`]
