@@ -229,3 +229,22 @@ fn a_log_coded_sequence_says_it_reuses_no_tile_row() {
             .contains("one band")
     );
 }
+
+#[test]
+fn a_moving_camera_reuses_no_tile_row_and_the_report_says_so() {
+    // The camera pans: every primitive moves on the screen in every frame.
+    let scene = flypast_with(|t| {
+        t.replacen(
+            "interpolation = \"linear\"\n",
+            "interpolation = \"linear\"\n\n[[sequence.camera]]\nframe = 0\nlook_at = [0.0, 0.0, -1.0]\n\n[[sequence.camera]]\nframe = 31\nlook_at = [0.2, 0.05, -1.0]\n",
+            1,
+        )
+    });
+    let hw = HwConfig::default_config();
+    let (r, with) = common::run_sequence(&scene, &hw, 0..4, false, true);
+    let (_, without) = common::run_sequence(&scene, &hw, 0..4, false, false);
+    assert!(with == without);
+    assert!(r.reuse.camera_moves);
+    assert_eq!(r.reuse.tile_rows_reused, 0, "{:?}", r.reuse);
+    assert_eq!(r.reuse.frames_fully_reused, 0);
+}
