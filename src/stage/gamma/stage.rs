@@ -49,6 +49,17 @@ fn lut_key(kind: &str, spec: &GammaSpec, acc_bits: u32, f: u32) -> u64 {
         .finish()
 }
 
+/// The key of an eq. 15 LUT (log-coded frame input) of `kind` with `f` extra output bits.
+fn log_lut_key(kind: &str, spec: &GammaSpec, add: &LogAdder, f: u32) -> u64 {
+    Fnv::new()
+        .u64(lut_key(kind, spec, 0, f))
+        .str(&format!("{:?}", add.code))
+        .u64(u64::from(add.fa))
+        .u64(add.off as u64)
+        .u64(add.max as u64)
+        .finish()
+}
+
 fn frame_bits(hw: &HwConfig) -> (u32, u32) {
     let f = hw.accumulate.frame.format;
     (f.int_bits, f.frac_bits)
@@ -111,21 +122,25 @@ impl Stage for Gamma {
             match &frame.coding {
                 FrameCoding::Log(add) if dither_after => {
                     let f = hw.dither.frac_bits;
-                    let lut = log_gamma_lut_extended(add, &spec, f);
+                    let lut = memo(cx.memo, log_lut_key("log extended", &spec, add, f), || {
+                        log_gamma_lut_extended(add, &spec, f)
+                    });
                     let mut codes = cx.pool.scratch(acc.len(), 0u32);
                     lookup(&lut, acc, 0, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("log_input_eq15", true);
                     facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
-                    (Lut::LogExtended(Arc::new(lut), add.clone(), f), codes, f)
+                    (Lut::LogExtended(lut, add.clone(), f), codes, f)
                 }
                 FrameCoding::Log(add) => {
-                    let lut = log_gamma_lut(add, &spec);
+                    let lut = memo(cx.memo, log_lut_key("log", &spec, add, 0), || {
+                        log_gamma_lut(add, &spec)
+                    });
                     let mut codes = cx.pool.scratch(acc.len(), 0u32);
                     lookup(&lut, acc, 0, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("log_input_eq15", true);
-                    (Lut::Log(Arc::new(lut), add.clone()), codes, 0)
+                    (Lut::Log(lut, add.clone()), codes, 0)
                 }
                 FrameCoding::Linear if dither_after => {
                     let f = hw.dither.frac_bits;
