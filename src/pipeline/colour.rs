@@ -9,13 +9,12 @@
 //! and the cost of three intensity datapaths.
 
 use super::cache::Cache;
-use super::plan::Plan;
-use super::report::{EndToEnd, ideal, workload};
+use super::report::{EndToEnd, ideal};
 use super::run::Step;
 use crate::colour::{self, ColourDisplay, DeltaE, HueShift, RgbCodes};
 use crate::compare::{self, DisplayModel};
 use crate::config::HwConfig;
-use crate::cycles;
+use crate::cycles::{self, Workload};
 use crate::perceptual::{self, ContourReport};
 use crate::scene::Scene;
 use crate::stage::{PixelTapF, Pool, StageReport};
@@ -159,14 +158,15 @@ pub fn report(
     (r, map)
 }
 
-/// Channel `c`'s codes and report from its lane's steps (`lane`: the stages after
-/// visibility, behind the shared `geometry` steps) under its configuration `hw` (already
-/// [`HwConfig::channel`]).
+/// Channel `c`'s codes and report from its lane's steps (`lane`: the stages after the
+/// shared geometry) and its cycle `workload` (the geometry's steps and the lane's) under
+/// its configuration `hw` (already [`HwConfig::channel`]).
 pub fn channel(
     scene: &Scene,
     hw: &HwConfig,
     c: usize,
-    (plan, geometry, lane): (&Plan, &[Step], &[Step]),
+    lane: &[Step],
+    workload: &Workload,
     cache: Option<&Cache>,
 ) -> (ChannelCodes, ChannelReport) {
     let (dac, dac_ref) = dac_codes(lane);
@@ -175,9 +175,7 @@ pub fn channel(
     let ideal = ideal(scene, hw, lane, cache);
     let contours = perceptual::contours(&dac, &dac_ref, &ideal.ideal, &display);
     let stages: Vec<StageReport> = lane.iter().map(|s| s.outcome.report.clone()).collect();
-    let frame: Vec<Step> = geometry.iter().chain(lane).cloned().collect();
-    let workload = workload(plan, &frame, &hw.cycles, hw.dof.schedule);
-    let simulate = || (cycles::simulate(&workload, None), 0.0);
+    let simulate = || (cycles::simulate(workload, None), 0.0);
     let sim = match cache {
         Some(k) => k.sim(workload.key(), simulate).0,
         None => std::sync::Arc::new(simulate()),

@@ -167,7 +167,7 @@ fn render_on_pool(
     let hw0 = hw.channel(0);
     let (dac, dac_ref) = colour::dac_codes(&steps);
     let ideal = report::ideal(scene, &hw0, &steps, cache);
-    let (mut report, workload, contour_map) = report::build(
+    let (mut report, mut workloads, contour_map) = report::build(
         scene,
         hw,
         &plan,
@@ -188,8 +188,7 @@ fn render_on_pool(
             } else {
                 &lanes[c - 1][..]
             };
-            let parts = (&plan, &steps[..split], lane);
-            let (k, r) = colour::channel(scene, &hw.channel(c), c, parts, cache);
+            let (k, r) = colour::channel(scene, &hw.channel(c), c, lane, &workloads[c], cache);
             codes.push(k);
             reports.push(r);
         }
@@ -215,7 +214,7 @@ fn render_on_pool(
         dac_ref,
         truth_dac,
         dac_bits: hw.gamma.dac_bits,
-        workload,
+        workload: workloads.swap_remove(0),
         contour_map,
         colour,
     })

@@ -192,6 +192,8 @@ pub(super) struct Totals {
     pub stages: Vec<StageReport>,
     /// Each channel's streamed depth-of-field line-buffer bits (one entry for grey).
     pub lane_line_bits: Vec<u64>,
+    /// The cycle model's workload of each channel lane after the first (colour).
+    pub lane_workloads: Vec<Workload>,
     /// Overflows over every lane's signals.
     pub overflows: u64,
     /// RAM bits of every lane, with the streamed depth of field's line buffers.
@@ -247,14 +249,22 @@ pub(super) fn totals(
         .iter()
         .position(|s| s.id == StageId::Visibility)
         .map_or(&steps[..0], |v| &steps[..=v]);
-    let lane_line_bits: Vec<u64> = std::iter::once(workload.line_buffer_bits())
-        .chain(lanes.iter().enumerate().map(|(c, l)| {
-            if !l.iter().any(|s| s.id == StageId::Dof) {
-                return 0;
-            }
+    let lane_workloads: Vec<Workload> = lanes
+        .iter()
+        .enumerate()
+        .map(|(c, l)| {
             let frame: Vec<Step> = geometry.iter().chain(l).cloned().collect();
             let h = full.channel(c + 1);
-            self::workload(plan, &frame, &h.cycles, h.dof.schedule).line_buffer_bits()
+            self::workload(plan, &frame, &h.cycles, h.dof.schedule)
+        })
+        .collect();
+    let lane_line_bits: Vec<u64> = std::iter::once(workload.line_buffer_bits())
+        .chain(lanes.iter().zip(&lane_workloads).map(|(l, w)| {
+            if l.iter().any(|s| s.id == StageId::Dof) {
+                w.line_buffer_bits()
+            } else {
+                0
+            }
         }))
         .collect();
     let line_bits = lane_line_bits.iter().sum::<u64>();
@@ -282,6 +292,7 @@ pub(super) fn totals(
     Totals {
         stages,
         lane_line_bits,
+        lane_workloads,
         overflows,
         storage_bits,
         lut_bits,
@@ -301,7 +312,8 @@ pub(super) fn scene_info(scene: &Scene, plan: &Plan) -> SceneInfo {
     }
 }
 
-/// Assembles the report and simulates the cycle model (reusing a cached simulation).
+/// Assembles the report and simulates the cycle model (reusing a cached simulation); also
+/// returns every channel lane's workload (channel 0's first) and the contour map.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build(
     scene: &Scene,
@@ -313,7 +325,7 @@ pub(super) fn build(
     ideal: &IdealImage,
     cache: Option<&Cache>,
     opts: crate::stage::RunOptions,
-) -> (Report, Workload, Vec<u8>) {
+) -> (Report, Vec<Workload>, Vec<u8>) {
     let steps = steps_lanes.0;
     let hw = &full.channel(0);
     let codes = compare::codes(dac, dac_ref, hw.gamma.dac_bits);
@@ -342,5 +354,9 @@ pub(super) fn build(
         dof_truth: None,
         colour: None,
     };
-    (report, t.workload, contours.map)
+    // Every lane's workload: channel 0's (the report's) first.
+    let workloads = std::iter::once(t.workload)
+        .chain(t.lane_workloads)
+        .collect();
+    (report, workloads, contours.map)
 }
