@@ -103,42 +103,35 @@ fn sliding_min_max(v: &[(f64, f64)], n: usize, stride: usize) -> Vec<(f64, f64)>
         .collect()
 }
 
-/// Excess steps along one direction from the integral images of the two outputs' and the
-/// ideal luminance: per pair, indexed by the first pixel, the excess factor
-/// `exp(excess) >= 1` of each output (`None` where the window leaves the image or is not
-/// smooth); `horizontal` pairs `(x, y)-(x+1, y)`.
-fn excess(
+/// The excess factors `exp(excess) >= 1` of the two outputs (integral images `so`) at the
+/// pair whose first pixel is `(x, y)` along one direction (`horizontal`: `(x, y)-(x+1, y)`);
+/// `None` where the window leaves the image or is not smooth.
+#[inline]
+fn excess_at(
+    (x, y): (usize, usize),
     so: [&[f64]; 2],
     ideal: &WholeIdeal,
     max_code: f64,
     horizontal: bool,
-) -> Vec<[Option<f64>; 2]> {
+) -> Option<[f64; 2]> {
     let (w, h) = (ideal.width, ideal.height);
-    let (si, span) = (&ideal.lum_integral, &ideal.span[usize::from(!horizontal)]);
-    (0..h * w)
-        .into_par_iter()
-        .map(|p| {
-            let (x, y) = (p % w, p / w);
-            let Some((ra, rb)) = step_windows(x, y, (w, h), horizontal) else {
-                return [None; 2];
-            };
-            // Smoothness of the ideal signal over the whole window, in DAC codes (scaling
-            // commutes with min and max: this is the span of the ideal codes themselves).
-            let (lo, hi) = span[ra.1 * w + ra.0];
-            if hi * max_code - lo * max_code > SMOOTH_CODES {
-                return [None; 2];
-            }
-            // |ln(A_out / B_out) - ln(A_ideal / B_ideal)| = ln(max(q, 1/q)) with q the ratio
-            // of the two ratios; kept as max(q, 1/q) (ln is monotone), so one division per
-            // output instead of two logarithms; the caller compares with exp(threshold).
-            let ideal = rect(si, w, ra.0, ra.1, ra.2, ra.3) / rect(si, w, rb.0, rb.1, rb.2, rb.3);
-            so.map(|s| {
-                let o = rect(s, w, ra.0, ra.1, ra.2, ra.3) / rect(s, w, rb.0, rb.1, rb.2, rb.3);
-                let q = o / ideal;
-                Some(q.max(1.0 / q))
-            })
-        })
-        .collect()
+    let d = usize::from(!horizontal);
+    let (ra, rb) = step_windows(x, y, (w, h), horizontal)?;
+    // Smoothness of the ideal signal over the whole window, in DAC codes (scaling commutes
+    // with min and max: this is the span of the ideal codes themselves).
+    let (lo, hi) = ideal.span[d][ra.1 * w + ra.0];
+    if hi * max_code - lo * max_code > SMOOTH_CODES {
+        return None;
+    }
+    // |ln(A_out / B_out) - ln(A_ideal / B_ideal)| = ln(max(q, 1/q)) with q the ratio of the
+    // two ratios; kept as max(q, 1/q) (ln is monotone), so one division per output instead
+    // of two logarithms; the caller compares with exp(threshold).
+    let ideal = ideal.ratio[d][y * w + x];
+    Some(so.map(|s| {
+        let o = rect(s, w, ra.0, ra.1, ra.2, ra.3) / rect(s, w, rb.0, rb.1, rb.2, rb.3);
+        let q = o / ideal;
+        q.max(1.0 / q)
+    }))
 }
 
 /// What the contour metric needs of the ideal (float reference, unquantised) image, none of
@@ -375,13 +368,16 @@ pub fn contours_banded(
     Contours { report: rep, map }
 }
 
-/// The whole-image form of the contour metric's inputs (the integral image of the ideal
-/// luminance and the spans of every window, 40 bytes per pixel plus 32 while it is built):
-/// the reference [`contours_whole`] is tested against.
+/// The whole-image form of the contour metric's inputs (the spans of every window and the
+/// ideal luminance ratio across every step, 48 bytes per pixel plus 40 while it is built):
+/// the reference [`contours_banded`] is tested against.
 pub struct WholeIdeal {
     width: usize,
     height: usize,
-    lum_integral: Vec<f64>,
+    /// Per direction (along x, along y), indexed by the pair's first pixel: `A_ideal /
+    /// B_ideal`, the ideal luminance ratio of the two side windows (0 where they leave the
+    /// image).
+    ratio: [Vec<f64>; 2],
     span: [Vec<(f64, f64)>; 2],
 }
 
@@ -402,17 +398,40 @@ impl WholeIdeal {
         let span = [(1, w), (w, 1)].map(|(along, across)| {
             sliding_min_max(&sliding_min_max(&pairs, 2 * l, along), 2 * hw + 1, across)
         });
+        let si = &lum_integral;
+        let ratio = [true, false].map(|horizontal| {
+            (0..w * h)
+                .into_par_iter()
+                .map(|p| match step_windows(p % w, p / w, (w, h), horizontal) {
+                    Some((a, b)) => {
+                        rect(si, w, a.0, a.1, a.2, a.3) / rect(si, w, b.0, b.1, b.2, b.3)
+                    }
+                    None => 0.0,
+                })
+                .collect()
+        });
         Self {
             width: w,
             height: h,
-            lum_integral,
+            ratio,
             span,
         }
     }
 }
 
-/// [`contours`] computed on whole-image planes (the reference of the banded form; about
-/// 90 bytes per pixel).
+/// Pixel rows per chunk of [`contours_whole`] (each chunk also computes the excesses of
+/// the row either side, for the local-maximum test across rows).
+const CHUNK: usize = 32;
+
+/// Per-pixel flags of [`contours_whole`]: a smooth step starts at the pixel, a visible
+/// contour step of the fixed output starts there along x, along y.
+const SMOOTH: u8 = 1;
+const CONTOUR_X: u8 = 2;
+const CONTOUR_Y: u8 = 4;
+
+/// [`contours`] computed on whole-image integral images and window spans (the reference of
+/// the banded form; about 60 bytes per pixel). Chunks of [`CHUNK`] rows run in parallel,
+/// each holding the excesses of its rows (and one row either side) only.
 pub fn contours_whole(
     dac: &[u16],
     dac_ref: &[u16],
@@ -421,41 +440,99 @@ pub fn contours_whole(
 ) -> Contours {
     let (w, h) = (ideal.width, ideal.height);
     let table = display.luminance_table();
-    let sf = integral(|i| table[dac[i] as usize], w, h);
-    let sr = integral(|i| table[dac_ref[i] as usize], w, h);
-    // Excess steps are kept as luminance-ratio factors >= 1 (see `excess`).
+    let (sf, sr) = rayon::join(
+        || integral(|i| table[dac[i] as usize], w, h),
+        || integral(|i| table[dac_ref[i] as usize], w, h),
+    );
+    // Excess steps are kept as luminance-ratio factors >= 1 (see `excess_at`); a missing
+    // one (not smooth, or the window leaves the image) as -inf, below every factor.
     let thr = 1.0 + display.weber;
-    let mut rep = ContourReport::empty(display.weber);
-    let mut map = vec![0u8; w * h];
-    for horizontal in [true, false] {
-        let ex = excess([&sf, &sr], ideal, display.max_code, horizontal);
-        let step = if horizontal { 1 } else { w };
-        let get = |p: Option<usize>, k: usize| p.and_then(|p| ex.get(p)).and_then(|v| v[k]);
-        for p in 0..w * h {
-            if ex[p][0].is_none() {
-                continue;
-            }
-            rep.smooth_steps += 1;
-            map[p] = map[p].max(1);
-            let prev = p.checked_sub(step);
-            let next = Some(p + step);
-            for (k, e) in ex[p].iter().enumerate() {
-                let e = e.unwrap_or(1.0);
-                if e > thr
-                    && get(prev, k).is_none_or(|v| e >= v)
-                    && get(next, k).is_none_or(|v| e > v)
-                {
-                    if k == 0 {
-                        rep.contour_steps += 1;
-                        map[p] = 2;
-                        map[p + step] = 2;
-                    } else {
-                        rep.contour_steps_reference += 1;
+    let so = [&sf[..], &sr[..]];
+    let mut flags = vec![0u8; w * h];
+    let chunk = CHUNK * w.max(1);
+    let zero = || (0u64, 0u64, 0u64);
+    let (smooth, steps, steps_ref) = flags
+        .par_chunks_mut(chunk)
+        .enumerate()
+        .map_init(Vec::new, |ex: &mut Vec<[f64; 2]>, (ci, fl)| {
+            let (y0, y1) = (ci * CHUNK, (ci * CHUNK + CHUNK).min(h));
+            let (e0, e1) = (y0.saturating_sub(1), (y1 + 1).min(h));
+            let n = (e1 - e0) * w;
+            ex.clear();
+            ex.resize(2 * n, [f64::NEG_INFINITY; 2]);
+            for (d, horizontal) in [true, false].into_iter().enumerate() {
+                for y in e0..e1 {
+                    for x in 0..w {
+                        if let Some(e) = excess_at((x, y), so, ideal, display.max_code, horizontal)
+                        {
+                            ex[d * n + (y - e0) * w + x] = e;
+                        }
                     }
                 }
             }
-        }
-    }
+            let mut count = zero();
+            for (d, horizontal) in [true, false].into_iter().enumerate() {
+                let at = |x: usize, y: usize| &ex[d * n + (y - e0) * w + x];
+                let flag = if horizontal { CONTOUR_X } else { CONTOUR_Y };
+                for y in y0..y1 {
+                    for x in 0..w {
+                        let e = at(x, y);
+                        if e[0] == f64::NEG_INFINITY {
+                            continue;
+                        }
+                        count.0 += 1;
+                        fl[(y - y0) * w + x] |= SMOOTH;
+                        // The neighbours along the direction (none outside the image).
+                        let (prev, next) = if horizontal {
+                            (
+                                x.checked_sub(1).map(|x| at(x, y)),
+                                (x + 1 < w).then(|| at(x + 1, y)),
+                            )
+                        } else {
+                            (
+                                y.checked_sub(1).map(|y| at(x, y)),
+                                (y + 1 < h).then(|| at(x, y + 1)),
+                            )
+                        };
+                        for k in 0..2 {
+                            let v = e[k];
+                            if v > thr
+                                && prev.is_none_or(|u| v >= u[k])
+                                && next.is_none_or(|u| v > u[k])
+                            {
+                                if k == 0 {
+                                    count.1 += 1;
+                                    fl[(y - y0) * w + x] |= flag;
+                                } else {
+                                    count.2 += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            count
+        })
+        .reduce(zero, |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+    // The map: a pixel is next to a contour step that starts at it or at the pixel before
+    // it along x or y.
+    let mut map = vec![0u8; w * h];
+    map.par_chunks_mut(w.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, m) in row.iter_mut().enumerate() {
+                let p = y * w + x;
+                let f = flags[p];
+                let near = f & (CONTOUR_X | CONTOUR_Y) != 0
+                    || (x > 0 && flags[p - 1] & CONTOUR_X != 0)
+                    || (y > 0 && flags[p - w] & CONTOUR_Y != 0);
+                *m = if near { 2 } else { f & SMOOTH };
+            }
+        });
+    let mut rep = ContourReport::empty(display.weber);
+    rep.smooth_steps = smooth;
+    rep.contour_steps = steps;
+    rep.contour_steps_reference = steps_ref;
     rep.contour_pixels = map.iter().filter(|&&m| m == 2).count() as u64;
     Contours { report: rep, map }
 }

@@ -9,13 +9,13 @@
 //! and the cost of three intensity datapaths.
 
 use super::cache::Cache;
-use super::report::{EndToEnd, ideal};
+use super::report::{EndToEnd, compare_codes, ideal};
 use super::run::Step;
 use crate::colour::{self, ColourDisplay, DeltaE, HueShift, RgbCodes};
-use crate::compare::{self, DisplayModel};
+use crate::compare::DisplayModel;
 use crate::config::HwConfig;
 use crate::cycles::{self, Workload};
-use crate::perceptual::{self, ContourReport};
+use crate::perceptual::ContourReport;
 use crate::scene::Scene;
 use crate::stage::{PixelTapF, Pool, StageReport};
 use serde::Serialize;
@@ -173,7 +173,7 @@ pub fn channel(
     let bits = hw.gamma.dac_bits;
     let display = DisplayModel::new(&scene.display, bits);
     let ideal = ideal(scene, hw, lane, cache);
-    let contours = perceptual::contours(&dac, &dac_ref, &ideal.ideal, &display);
+    let compared = compare_codes((&dac, &dac_ref), lane, &ideal, (&display, bits), cache);
     let stages: Vec<StageReport> = lane.iter().map(|s| s.outcome.report.clone()).collect();
     let simulate = || (cycles::simulate(workload, None), 0.0);
     let sim = match cache {
@@ -187,11 +187,8 @@ pub fn channel(
         name: NAMES[c],
         frame: hw.accumulate.frame.format.to_string(),
         dac_bits: bits,
-        end_to_end: EndToEnd {
-            codes: compare::codes(&dac, &dac_ref, bits),
-            weber: compare::weber(&dac, &dac_ref, &display),
-        },
-        contours: contours.report,
+        end_to_end: compared.0.clone(),
+        contours: compared.1.report.clone(),
         overflows,
         storage_bits,
         lut_bits,
@@ -203,7 +200,7 @@ pub fn channel(
         dac,
         dac_ref,
         bits,
-        contour_map: contours.map,
+        contour_map: compared.1.map.clone(),
     };
     (codes, report)
 }

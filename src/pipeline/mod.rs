@@ -174,7 +174,7 @@ fn render_on_pool(
         (&steps, &lanes),
         &dac,
         &dac_ref,
-        &ideal.ideal,
+        &ideal,
         cache,
         opts,
     );

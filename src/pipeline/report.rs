@@ -103,6 +103,8 @@ pub struct Report {
 /// through the gamma curve), computed once per frame and exponent.
 pub(super) struct Ideal {
     pub ideal: Arc<IdealImage>,
+    /// Its memo key (the float frame and the gamma spec).
+    pub key: u64,
 }
 
 /// The gamma spec of a scene and hardware.
@@ -130,7 +132,7 @@ pub(super) fn ideal(scene: &Scene, hw: &HwConfig, steps: &[Step], cache: Option<
         Some(c) => c,
         None => &crate::stage::NoMemo,
     };
-    let pk = powers_key(before.key, &spec);
+    let pk = powers_key(before.outcome.taps.float.frame_key(before.key), &spec);
     let powers = memo(m, pk, || powers(frame_ref, hw, &spec));
     let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
     let ik = Fnv::new().u64(pk).str("ideal image").finish();
@@ -142,7 +144,43 @@ pub(super) fn ideal(scene: &Scene, hw: &HwConfig, steps: &[Step], cache: Option<
             scene.image.height,
         )
     });
-    Ideal { ideal }
+    Ideal { ideal, key: ik }
+}
+
+/// The DAC codes of `steps` (the last step's) against their float reference: code by code,
+/// through the display model and the visible contours, memoised in `cache` by the last
+/// step's key, the ideal image and the display. Two sweep rows whose outputs are the same
+/// (a field the plan does not read, such as `dither.frac_bits` without a dither) compare
+/// once.
+pub(super) fn compare_codes(
+    (dac, dac_ref): (&[u16], &[u16]),
+    steps: &[Step],
+    ideal: &Ideal,
+    (display, bits): (&DisplayModel, u32),
+    cache: Option<&Cache>,
+) -> Arc<(EndToEnd, perceptual::Contours)> {
+    let make = || {
+        let e = EndToEnd {
+            codes: compare::codes(dac, dac_ref, bits),
+            weber: compare::weber(dac, dac_ref, display),
+        };
+        (e, perceptual::contours(dac, dac_ref, &ideal.ideal, display))
+    };
+    let (Some(c), Some(last)) = (cache, steps.last()) else {
+        return Arc::new(make());
+    };
+    let d = display;
+    let key = Fnv::new()
+        .str("end to end")
+        .u64(last.key)
+        .u64(ideal.key)
+        .u64(u64::from(bits))
+        .u64(d.b_min.to_bits())
+        .u64(d.b_max.to_bits())
+        .u64(d.gamma.to_bits())
+        .u64(d.weber.to_bits())
+        .finish();
+    memo(c, key, make)
 }
 
 /// The cycle model's workload of a run: the planned stages' tokens chained under the
@@ -322,16 +360,16 @@ pub(super) fn build(
     steps_lanes: (&[Step], &[Vec<Step>]),
     dac: &[u16],
     dac_ref: &[u16],
-    ideal: &IdealImage,
+    ideal: &Ideal,
     cache: Option<&Cache>,
     opts: crate::stage::RunOptions,
 ) -> (Report, Vec<Workload>, Vec<u8>) {
     let steps = steps_lanes.0;
     let hw = &full.channel(0);
-    let codes = compare::codes(dac, dac_ref, hw.gamma.dac_bits);
-    let display = DisplayModel::new(&scene.display, hw.gamma.dac_bits);
-    let weber = compare::weber(dac, dac_ref, &display);
-    let contours = perceptual::contours(dac, dac_ref, ideal, &display);
+    let bits = hw.gamma.dac_bits;
+    let display = DisplayModel::new(&scene.display, bits);
+    let compared = compare_codes((dac, dac_ref), steps, ideal, (&display, bits), cache);
+    let (end_to_end, contours) = (compared.0.clone(), &compared.1);
     let t = totals(scene, full, plan, steps_lanes, cache);
     let report = Report {
         igemu_version: env!("CARGO_PKG_VERSION").into(),
@@ -344,13 +382,13 @@ pub(super) fn build(
             .filter(|s| s.reused)
             .map(|s| s.id.name().to_string())
             .collect(),
-        end_to_end: EndToEnd { codes, weber },
+        end_to_end,
         overflows: t.overflows,
         storage_bits: t.storage_bits,
         lut_bits: t.lut_bits,
         timing: t.timing,
         cycles: t.cycles,
-        contours: contours.report,
+        contours: contours.report.clone(),
         dof_truth: None,
         colour: None,
     };
@@ -358,5 +396,5 @@ pub(super) fn build(
     let workloads = std::iter::once(t.workload)
         .chain(t.lane_workloads)
         .collect();
-    (report, workloads, contours.map)
+    (report, workloads, contours.map.clone())
 }
