@@ -406,16 +406,7 @@ fn a_sweep_row_carries_the_truth_errors_and_the_truth_is_computed_once_per_scene
             .join(format!("{name}.jsonl"))
             .to_string_lossy()
             .into_owned();
-        let opts = sweep::SweepOptions {
-            out: &out,
-            resume: false,
-            shard: None,
-            jobs: 1,
-            cache: c,
-            flicker: None,
-            max_memory: None,
-            dof_truth: Some(16),
-        };
+        let opts = common::serial_sweep(&out, c, Some(16));
         let s = sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).unwrap();
         runs.push(s.rows);
     }

@@ -366,32 +366,11 @@ fn flicker_metrics_are_the_flicker_sweeps_worst_object_and_only_when_asked() {
 #[test]
 fn stage_reuse_gives_the_rows_of_full_renders() {
     let d = tmp("reuse");
-    let scene_path = scene_file(&d);
-    let scene = igemu::scene::Scene::load(&scene_path).unwrap();
+    let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
     let text = "gamma.dac_bits = [6, 8, 10]\ndither.kind = [\"none\", \"bayer4\"]\n\
                 accumulate.frame = [\"UQ10.0\", \"UQ12.0\"]\n";
-    let f = TomlFile::from_text("g.toml", text);
-    let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
     let cache = igemu::pipeline::Cache::new();
-    let mut outs = Vec::new();
-    for (name, c) in [("cached", Some(&cache)), ("full", None)] {
-        let out = d
-            .join(format!("{name}.jsonl"))
-            .to_string_lossy()
-            .into_owned();
-        let opts = sweep::SweepOptions {
-            out: &out,
-            resume: false,
-            shard: None,
-            jobs: 1,
-            cache: c,
-            flicker: None,
-            max_memory: None,
-            dof_truth: None,
-        };
-        sweep::run(&configs, std::slice::from_ref(&scene), &opts, &|_, _| {}).unwrap();
-        outs.push(rows(&out));
-    }
+    let outs = cached_and_full_rows("reuse", &scene, text, &cache);
     assert_eq!(outs[0].len(), 12);
     assert_eq!(outs[0], outs[1]);
     // accumulate.frame varies slowest (the vertex intensity follows it, so every stage
@@ -476,16 +455,7 @@ fn reuse_rows(name: &str, scene: &igemu::scene::Scene, grid: &str) -> Vec<sweep:
     let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
     let cache = igemu::pipeline::Cache::new();
     let out = d.join("out.jsonl").to_string_lossy().into_owned();
-    let opts = sweep::SweepOptions {
-        out: &out,
-        resume: false,
-        shard: None,
-        jobs: 1,
-        cache: Some(&cache),
-        flicker: None,
-        max_memory: None,
-        dof_truth: None,
-    };
+    let opts = common::serial_sweep(&out, Some(&cache), None);
     sweep::run(&configs, std::slice::from_ref(scene), &opts, &|_, _| {})
         .unwrap()
         .rows
@@ -1077,4 +1047,58 @@ fn a_per_channel_sweep_with_stage_reuse_gives_the_rows_of_full_renders() {
         outs.push(rows(&out));
     }
     assert_eq!(outs[0], outs[1]);
+}
+
+/// The rows of `grid` on `scene` with stage reuse (in `cache`) and without (full renders).
+fn cached_and_full_rows(
+    name: &str,
+    scene: &igemu::scene::Scene,
+    grid: &str,
+    cache: &igemu::pipeline::Cache,
+) -> [Vec<serde_json::Value>; 2] {
+    let d = tmp(name);
+    let f = TomlFile::from_text("g.toml", grid);
+    let configs = grid::Grid::parse(&f).unwrap().expand(&f).unwrap();
+    [Some(cache), None].map(|c| {
+        let out = d
+            .join(format!("{}.jsonl", c.is_some()))
+            .to_string_lossy()
+            .into_owned();
+        let opts = common::serial_sweep(&out, c, None);
+        sweep::run(&configs, std::slice::from_ref(scene), &opts, &|_, _| {}).unwrap();
+        rows(&out)
+    })
+}
+
+/// The layered depth of field's float reference is shared by the rows whose layer plans
+/// agree on what it reads (the taps' support, not their values), and the gamma curve's
+/// powers and the contour metric's ideal image with it: every row still equals its full
+/// render. `coef_bits = 4` zeroes tail taps that 12 bits keep (another support), and
+/// `p` moves the layers.
+#[test]
+fn a_dof_width_sweep_shares_the_float_reference_and_gives_the_rows_of_full_renders() {
+    let scene = igemu::scene::Scene::default_scene();
+    let grid = "dof.p = [0.1, 0.3]\ndof.coef_bits = [4, 12]\ndof.guard_bits = [2, 4]\n";
+    let cache = igemu::pipeline::Cache::new();
+    let [cached, full] = cached_and_full_rows("dof-float", &scene, grid, &cache);
+    assert_eq!(cached.len(), 8);
+    assert_eq!(cached, full);
+    // The widths do change the fixed output (the test is not vacuous).
+    let err = |r: &serde_json::Value| r["error"].clone();
+    assert_ne!(err(&cached[0]), err(&cached[1]));
+    assert_ne!(err(&cached[0]), err(&cached[2]));
+}
+
+/// Rows whose outputs are the same (`dither.frac_bits` without a dither) share one
+/// end-to-end comparison, and each still equals its full render.
+#[test]
+fn rows_with_the_same_output_compare_once_and_equal_their_full_renders() {
+    let d = tmp("same-output-scene");
+    let scene = igemu::scene::Scene::load(&scene_file(&d)).unwrap();
+    let grid = "gamma.dac_bits = [6, 8]\ndither.kind = [\"none\", \"bayer4\"]\n\
+                dither.frac_bits = [1, 3]\n";
+    let cache = igemu::pipeline::Cache::new();
+    let [cached, full] = cached_and_full_rows("same-output", &scene, grid, &cache);
+    assert_eq!(cached.len(), 8);
+    assert_eq!(cached, full);
 }

@@ -412,6 +412,7 @@ pub fn run(
             coding: f.coding.expect("a band ran"),
         }));
         t.float.frame = opts.reference.then(|| Arc::new(f.float));
+        t.float.frame_content = None;
         // The memories of the whole frame, packed once.
         let cx = Cx {
             scene,

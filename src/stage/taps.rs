@@ -87,6 +87,12 @@ pub struct FloatTaps {
     pub more_samples: Vec<Arc<SampleTapF>>,
     /// Frame intensity in frame LSBs.
     pub frame: Option<Arc<Vec<f64>>>,
+    /// A key of `frame`'s content finer than the key of the stage that wrote it, where that
+    /// stage knows one (the layered depth of field's float, the same for every datapath
+    /// width of one layer plan); `None`: the writing stage's key. Every stage that writes
+    /// `frame` sets it. Values derived from the float frame alone are memoised by
+    /// [`FloatTaps::frame_key`].
+    pub frame_content: Option<u64>,
     /// Pixel values after the gamma curve or the dither.
     pub pixels: Option<Arc<PixelTapF>>,
 }
@@ -147,6 +153,11 @@ impl FixedTaps {
 }
 
 impl FloatTaps {
+    /// The key of the float frame's content: [`FloatTaps::frame_content`], else `stage_key`
+    /// (the key of the stage that wrote it: the next stage's input key).
+    pub fn frame_key(&self, stage_key: u64) -> u64 {
+        self.frame_content.unwrap_or(stage_key)
+    }
     /// The float primitives.
     pub fn prims(&self) -> &PrimsF {
         need(&self.prims, "float prims")

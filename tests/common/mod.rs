@@ -291,3 +291,22 @@ pub fn run_sequence(
     .unwrap_or_else(|e| panic!("{e}"));
     (r, kept)
 }
+
+/// The options of a serial, fresh sweep writing `out`, reusing stages in `cache` (`None`:
+/// full renders), with the depth-of-field truth at `dof_truth` rays when asked.
+pub fn serial_sweep<'a>(
+    out: &'a str,
+    cache: Option<&'a igemu::pipeline::Cache>,
+    dof_truth: Option<u32>,
+) -> igemu::sweep::SweepOptions<'a> {
+    igemu::sweep::SweepOptions {
+        out,
+        resume: false,
+        shard: None,
+        jobs: 1,
+        cache,
+        flicker: None,
+        max_memory: None,
+        dof_truth,
+    }
+}

@@ -181,6 +181,7 @@ impl Stage for Accumulate {
         let size = frame_size(l);
         let frame_ref = float_frame(taps.float.samples(), &a.kernel, cx.hw, size, &l.region);
         taps.float.frame = Some(Arc::new(frame_ref));
+        taps.float.frame_content = None;
         Ok(())
     }
 

@@ -5,6 +5,7 @@ use super::fixed::{border_sums, share};
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::uniform;
 use crate::config::AlphaNorm;
+use crate::fnv::Fnv;
 
 /// The float taps on the fixed mask's support (taps that quantise to 0 are 0), renormalised
 /// to sum 1. The support decides which layers reach a pixel and hence which one fills it
@@ -19,6 +20,40 @@ fn on_fixed_support(tf: &[f64], t: &[u64]) -> Vec<f64> {
         .collect();
     let sum: f64 = kept.iter().sum();
     kept.into_iter().map(|v| v / sum).collect()
+}
+
+/// A digest of everything [`layered_f64`] reads of `plan` besides the image: each layer's
+/// half-size, float taps and the fixed taps' support (not their values: the float does not
+/// read them), the pixels' layers, the background layer and the alpha normaliser. Two
+/// plans with the same digest give the same float output on the same image, so a sweep of
+/// the fixed datapath's widths (`dof.coef_bits`, `dof.alpha_bits`, `dof.guard_bits`) runs
+/// the float reference once per distinct plan.
+pub fn layered_f64_key(plan: &LayerPlan) -> u64 {
+    let support = |f: Fnv, q: &[u64]| {
+        let bits: Vec<u8> = q.iter().map(|&v| u8::from(v != 0)).collect();
+        f.part(&bits)
+    };
+    let mut f = Fnv::new().str("layered_f64");
+    for l in &plan.layers {
+        f = f.u64(l.m as u64);
+        for &c in &l.coef_f {
+            f = f.u64(c.to_bits());
+        }
+        f = support(f.str("support"), &l.coef);
+        if let Some(d) = &l.disc {
+            f = f.str("disc").u64(d.m as u64);
+            for &c in &d.wf {
+                f = f.u64(c.to_bits());
+            }
+            f = support(f, &d.w);
+        }
+        f = f.str("layer");
+    }
+    let index: Vec<u8> = plan.index.iter().flat_map(|i| i.to_le_bytes()).collect();
+    f.part(&index)
+        .u64(plan.background.map_or(u64::MAX, |b| b as u64))
+        .u64(u64::from(plan.alpha_norm == AlphaNorm::Behind))
+        .finish()
 }
 
 /// Float reference (1): the same layers and masks (float taps on the fixed taps' support),

@@ -117,7 +117,7 @@ pub use fixed::{
     DofWork, Exec, FixedRun, LayerPlanes, MacOut, STRIP_ROWS, border_sum, layered_fixed,
     layered_fixed_exec, layered_fixed_observed, row_mac,
 };
-pub use float::{layered_f64, layered_f64_exec};
+pub use float::{layered_f64, layered_f64_exec, layered_f64_key};
 pub use kernel::{FITTED_SCALE, Mask2, disc_f64, disc_half_size, gaussian_sigma, kernel_half_size};
 pub use layers::{
     DepthImage, Layer, LayerPlan, LayerWork, layer_work, plan_layers, plan_layers_in,

@@ -11,16 +11,18 @@ use super::method::{Method, n2};
 use super::potentiate::FramePotentiation;
 use super::{
     DepthImage, LayerPlan, LensMap, RegionError, SIGMA_FRAC, additive_layered, depth_edge_band,
-    difference_degree, edge_band, local_error, per_pixel_scatter, region_error, weber_linear,
+    difference_degree, edge_band, layered_f64_key, local_error, per_pixel_scatter, region_error,
+    weber_linear,
 };
 use crate::config::{CodingKind, DofKind, HwConfig};
 use crate::error::Result;
 use crate::fixed::QFormat;
+use crate::fnv::Fnv;
 use crate::scene::{Lens, Scene};
 use crate::stage::accumulate::Frame;
 use crate::stage::taps::{ChannelFrames, FrameCoding, FrameTap, Taps};
 use crate::stage::{
-    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Pool, Stage, StageId, Tokens,
+    Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Pool, Stage, StageId, Tokens, memo,
 };
 use std::sync::Arc;
 
@@ -230,14 +232,31 @@ impl Stage for Dof {
     /// depth-edge band and the interior) and, for the layered method, the layer theorem's
     /// check.
     fn float(&self, cx: &Cx, b: &Blurred, taps: &mut Taps, notes: &mut Notes) -> Result<()> {
-        let new_ref = b.float(cx, taps.float.frame(), false);
+        let value = taps.float.frame();
+        let (new_ref, content) = match (&b.plan, &b.pot) {
+            // The layered float on a linear input frame is memoised by its input and the
+            // plan's digest: a sweep of the datapath's widths runs it once per plan, and
+            // what the next stages derive from it (the gamma curve's powers, the contour
+            // metric's ideal image) once as well.
+            (MethodPlan::Layered(plan), None) => {
+                let key = Fnv::new()
+                    .str("dof float")
+                    .u64(cx.input_key)
+                    .u64(u64::from(n2(cx)))
+                    .u64(layered_f64_key(plan))
+                    .finish();
+                (memo(cx.memo, key, || b.float(cx, value, false)), Some(key))
+            }
+            _ => (Arc::new(b.float(cx, value, false)), None),
+        };
+        taps.float.frame_content = content;
         if cx.opts.dof_reference {
             notes.insert(
                 "per_pixel_reference".into(),
                 per_pixel_notes(cx, b, &taps.fixed.frame().frame.acc),
             );
         }
-        taps.float.frame = Some(Arc::new(new_ref));
+        taps.float.frame = Some(new_ref);
         Ok(())
     }
 

@@ -206,9 +206,8 @@ impl Stage for Gamma {
             }
             _ => {
                 let frame_ref = taps.float.frame();
-                let p = memo(cx.memo, powers_key(cx.input_key, &spec), || {
-                    powers(frame_ref, hw, &spec)
-                });
+                let key = powers_key(taps.float.frame_key(cx.input_key), &spec);
+                let p = memo(cx.memo, key, || powers(frame_ref, hw, &spec));
                 if let Lut::Extended(..) | Lut::LogExtended(..) = lut {
                     PixelTapF::Values(p.par_iter().map(|&v| spec.scale(v)).collect())
                 } else {
