@@ -723,7 +723,7 @@ mod kernels {
                 let (din, s, omax): (&[u32], u32, u32) = match placement {
                     Placement::AfterLut => {
                         let px = before.fixed.pixels();
-                        (&px.codes, px.frac, px.max)
+                        (px.codes(), px.frac, px.max)
                     }
                     Placement::BeforeLut => (
                         &before.fixed.frame().frame.acc,
@@ -736,7 +736,7 @@ mod kernels {
                     reference(din, sc.image.width, s, omax, d.mask.as_ref().unwrap(), 0);
                 let dout = &r.steps[di].outcome;
                 assert_eq!(
-                    dout.taps.fixed.pixels().codes,
+                    dout.taps.fixed.pixels().codes(),
                     want,
                     "{name} {kind:?} {placement:?}"
                 );
@@ -747,7 +747,7 @@ mod kernels {
                 // The gamma LUT, per value, on its own input.
                 let spec = GammaSpec::of(&sc, &h);
                 let gin = &r.steps[gi - 1].outcome.taps;
-                let gout = &r.steps[gi].outcome.taps.fixed.pixels().codes;
+                let gout = r.steps[gi].outcome.taps.fixed.pixels().codes();
                 let want: Vec<u32> = match placement {
                     Placement::AfterLut => {
                         let lut = extended_lut(&spec, ff.int_bits, f);
@@ -763,7 +763,7 @@ mod kernels {
                         let lut = reduced_lut(&spec, ff.int_bits, f);
                         gin.fixed
                             .pixels()
-                            .codes
+                            .codes()
                             .iter()
                             .map(|&a| lut.table[a as usize] as u32)
                             .collect()

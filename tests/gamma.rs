@@ -179,7 +179,7 @@ mod kernel {
                 .map(|&a| lut.table[((a >> ff.frac_bits) as usize).min(lut.table.len() - 1)] as u32)
                 .collect();
             assert_eq!(
-                r.steps[gi].outcome.taps.fixed.pixels().codes,
+                r.steps[gi].outcome.taps.fixed.pixels().codes(),
                 want,
                 "{name}"
             );

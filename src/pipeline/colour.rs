@@ -55,7 +55,7 @@ pub fn lane_totals<'a>(
 /// The fixed DAC codes after the last of `steps`.
 pub fn fixed_codes(steps: &[Step], pool: &Pool) -> Vec<u16> {
     let taps = &steps.last().expect("a plan runs stages").outcome.taps;
-    let codes = &taps.fixed.pixels().codes;
+    let codes = taps.fixed.pixels().codes();
     let mut out = pool.take(codes.len());
     out.extend(codes.iter().map(|&c| c as u16));
     out

@@ -32,7 +32,7 @@ pub use report::{
     Cost, Facts, LocalError, MemImage, MemKind, Memory, Notes, RowStream, StageReport, TokenKind,
     Tokens, Unit, WeberCompare, ms_since, weber_of,
 };
-pub use taps::{ChannelFrames, FixedTaps, FloatTaps, PixelTap, PixelTapF, Taps};
+pub use taps::{ChannelFrames, FixedTaps, FloatTaps, LutRead, PixelTap, PixelTapF, Taps};
 
 /// The implementation of a stage: the one place that maps stage ids to stages.
 pub fn get(id: StageId) -> &'static dyn DynStage {

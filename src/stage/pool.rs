@@ -192,16 +192,19 @@ impl Pool {
                 self.give(s.samples.i);
             }
         }
+        // The pixels first: a deferred gamma tap holds the frame it reads.
+        for a in pixels {
+            if let Ok(p) = Arc::try_unwrap(a) {
+                let (codes, frame) = p.into_planes();
+                codes.into_iter().for_each(|c| self.give(c));
+                frames.extend(frame);
+            }
+        }
         for a in frames {
             if let Ok(f) = Arc::try_unwrap(a) {
                 self.give(f.frame.acc);
                 self.give(f.frame.depth);
                 self.give(f.frame.coverage);
-            }
-        }
-        for a in pixels {
-            if let Ok(p) = Arc::try_unwrap(a) {
-                self.give(p.codes);
             }
         }
     }

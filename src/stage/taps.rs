@@ -22,7 +22,7 @@ use super::setup::Setup;
 use super::visibility::{Samples, SamplesF};
 use crate::fixed::QFormat;
 use crate::scene::HostScene;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Every tap after a stage.
 #[derive(Clone, Default)]
@@ -348,15 +348,102 @@ pub struct FrameTap {
 }
 
 /// Pixel codes with `frac` fraction bits in `0..=max` (after the gamma LUT or the dither).
-#[derive(Clone, Debug, PartialEq, Eq)]
+///
+/// The gamma LUT before an ordered dither leaves its codes as a [`LutRead`] (the frame and
+/// the table) rather than a plane: the dither then looks them up row by row in its own
+/// pass (`stage::dither`), so the LUT's plane never goes to memory. Whoever else reads
+/// the codes ([`PixelTap::codes`]: a dump, the stage-local comparisons, a run stopped
+/// after gamma) gets them looked up once, on first read: the same codes either way.
+#[derive(Clone, Debug)]
 pub struct PixelTap {
-    /// Codes, row-major over the screen.
-    pub codes: Vec<u32>,
+    /// Codes, row-major over the screen (set, or looked up on first read from `lut`).
+    codes: OnceLock<Vec<u32>>,
+    /// Where the codes come from when they were not written as a plane.
+    lut: Option<LutRead>,
     /// Fraction bits (0: integer codes, e.g. the DAC codes).
     pub frac: u32,
     /// Largest code.
     pub max: u32,
 }
+
+/// Pixel codes not written as a plane: `table[min(acc[i] >> shift, len - 1)]` over the
+/// frame memory's codes `acc` ([`crate::stage::gamma::lookup`]).
+#[derive(Clone, Debug)]
+pub struct LutRead {
+    /// The frame the LUT reads.
+    pub frame: Arc<FrameTap>,
+    /// The LUT.
+    pub table: Arc<Vec<u32>>,
+    /// The frame's fraction bits the address drops.
+    pub shift: u32,
+}
+
+impl LutRead {
+    /// The frame codes the LUT is addressed by.
+    pub fn acc(&self) -> &[u32] {
+        &self.frame.frame.acc
+    }
+}
+
+impl PixelTap {
+    /// A plane of codes.
+    pub fn new(codes: Vec<u32>, frac: u32, max: u32) -> Self {
+        Self {
+            codes: OnceLock::from(codes),
+            lut: None,
+            frac,
+            max,
+        }
+    }
+
+    /// Codes a LUT gives the frame, looked up when first read.
+    pub fn deferred(lut: LutRead, frac: u32, max: u32) -> Self {
+        Self {
+            codes: OnceLock::new(),
+            lut: Some(lut),
+            frac,
+            max,
+        }
+    }
+
+    /// The codes, row-major (a deferred tap's are looked up on the first call).
+    pub fn codes(&self) -> &[u32] {
+        self.codes.get_or_init(|| {
+            let l = self
+                .lut
+                .as_ref()
+                .expect("a tap without codes has a LUT read");
+            let mut codes = vec![0u32; l.acc().len()];
+            crate::stage::gamma::lookup(&l.table, l.acc(), l.shift, &mut codes);
+            codes
+        })
+    }
+
+    /// The codes if they are a plane already (written, or looked up by an earlier read).
+    pub fn ready(&self) -> Option<&[u32]> {
+        self.codes.get().map(Vec::as_slice)
+    }
+
+    /// The LUT read of a deferred tap.
+    pub fn lut(&self) -> Option<&LutRead> {
+        self.lut.as_ref()
+    }
+
+    /// The tap's planes, for the pool: its codes (if any were made) and the frame of its
+    /// LUT read.
+    pub fn into_planes(self) -> (Option<Vec<u32>>, Option<Arc<FrameTap>>) {
+        (self.codes.into_inner(), self.lut.map(|l| l.frame))
+    }
+}
+
+impl PartialEq for PixelTap {
+    /// The same codes (deferred or not), fraction bits and largest code.
+    fn eq(&self, o: &Self) -> bool {
+        self.frac == o.frac && self.max == o.max && self.codes() == o.codes()
+    }
+}
+
+impl Eq for PixelTap {}
 
 /// Float pixels.
 #[derive(Clone, Debug, PartialEq)]
@@ -405,7 +492,7 @@ impl Taps {
                     .map(|&c| c as u32)
                     .collect(),
             ),
-            "codes" => Some(self.fixed.pixels.as_ref()?.codes.clone()),
+            "codes" => Some(self.fixed.pixels.as_ref()?.codes().to_vec()),
             _ => None,
         }
     }

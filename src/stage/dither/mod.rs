@@ -52,8 +52,8 @@ mod unit;
 pub use diffusion::{FsParams, floyd_steinberg, floyd_steinberg_f64};
 pub use mask::Mask;
 pub use ordered::{
-    Run, apply_ordered, apply_ordered_f64, apply_ordered_with, ordered_code, ordered_f64,
-    rank_threshold,
+    Input, Run, apply_ordered, apply_ordered_f64, apply_ordered_from, apply_ordered_with,
+    ordered_code, ordered_f64, rank_threshold,
 };
 pub use stage::DitherStage;
 pub use unit::{Dither, ERROR_LINE, MASK_ROM, PeriodMean, period_mean};

@@ -3,6 +3,7 @@
 //! the arithmetic).
 
 use super::mask::Mask;
+use crate::stage::gamma::{lookup_block, lookup_block_portable};
 use crate::stage::parts::run_parts;
 use rayon::prelude::*;
 
@@ -177,32 +178,143 @@ pub fn apply_ordered_with(
     out: &mut [u32],
     run: Run,
 ) -> u64 {
+    apply_ordered_from(Input::Codes(x), width, s, omax, mask, frame, out, run)
+}
+
+/// What an ordered dither reads: its input codes, or frame codes through a LUT (the gamma
+/// LUT fused into the dither's pass: each row's codes are looked up into a row buffer that
+/// stays in cache and dithered from there, so no LUT plane goes to memory).
+#[derive(Clone, Copy, Debug)]
+pub enum Input<'a> {
+    /// The `s`-fraction-bit codes.
+    Codes(&'a [u32]),
+    /// The codes `table[min(acc[i] >> shift, len - 1)]` ([`crate::stage::gamma::lookup`]).
+    Lut {
+        /// Frame codes (the LUT's addresses before the shift).
+        acc: &'a [u32],
+        /// The LUT.
+        table: &'a [u32],
+        /// Fraction bits the address drops.
+        shift: u32,
+    },
+}
+
+impl<'a> Input<'a> {
+    /// Pixels read.
+    pub fn len(&self) -> usize {
+        match self {
+            Input::Codes(x) => x.len(),
+            Input::Lut { acc, .. } => acc.len(),
+        }
+    }
+
+    /// Whether there is no pixel.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Pixels `from..to`.
+    fn part(self, from: usize, to: usize) -> Input<'a> {
+        match self {
+            Input::Codes(x) => Input::Codes(&x[from..to]),
+            Input::Lut { acc, table, shift } => Input::Lut {
+                acc: &acc[from..to],
+                table,
+                shift,
+            },
+        }
+    }
+
+    /// The codes as a plane (a LUT input is looked up, the portable build when `portable`).
+    pub fn to_codes(self, portable: bool) -> std::borrow::Cow<'a, [u32]> {
+        match self {
+            Input::Codes(x) => x.into(),
+            Input::Lut { acc, table, shift } => {
+                let mut v = vec![0u32; acc.len()];
+                lut_row(table, acc, shift, &mut v, portable);
+                v.into()
+            }
+        }
+    }
+}
+
+/// One row of a LUT input into `out` (serial).
+#[inline]
+fn lut_row(table: &[u32], acc: &[u32], shift: u32, out: &mut [u32], portable: bool) {
+    if portable {
+        lookup_block_portable(table, acc, shift, out)
+    } else {
+        lookup_block(table, acc, shift, out)
+    }
+}
+
+/// [`apply_ordered_with`] on an [`Input`]: the same codes and count as looking the LUT up
+/// over the frame first and dithering that.
+#[allow(clippy::too_many_arguments)]
+pub fn apply_ordered_from(
+    x: Input,
+    width: u32,
+    s: u32,
+    omax: u32,
+    mask: &Mask,
+    frame: u32,
+    out: &mut [u32],
+    run: Run,
+) -> u64 {
     let off = mask.offset(frame);
     let w = width.max(1) as usize;
     if s >= 32 || !mask.n.is_power_of_two() {
-        return apply_ordered_per_value(x, w, s, omax, mask, off, out);
+        let x = x.to_codes(run == Run::Portable);
+        return apply_ordered_per_value(&x, w, s, omax, mask, off, out);
     }
     let thr = ThresholdRows::new(mask, s, off);
     let avx2 = run != Run::Portable && simd::avx2();
-    let rows = |y0: usize, o: &mut [u32], xb: &[u32]| -> u64 {
-        o.chunks_mut(w)
-            .zip(xb.chunks(w))
-            .enumerate()
-            .map(|(k, (o, xr))| {
-                let t = thr.row(y0 + k, off.1, mask.n);
-                ordered_row(xr, t, s, omax, o, avx2)
-            })
-            .sum()
+    let rows = |y0: usize, o: &mut [u32], xb: Input| -> u64 {
+        match xb {
+            Input::Codes(xb) => o
+                .chunks_mut(w)
+                .zip(xb.chunks(w))
+                .enumerate()
+                .map(|(k, (o, xr))| {
+                    let t = thr.row(y0 + k, off.1, mask.n);
+                    ordered_row(xr, t, s, omax, o, avx2)
+                })
+                .sum(),
+            Input::Lut { acc, table, shift } => {
+                // The row's LUT codes, in cache between the lookup and the dither.
+                let mut buf = vec![0u32; w];
+                o.chunks_mut(w)
+                    .zip(acc.chunks(w))
+                    .enumerate()
+                    .map(|(k, (o, ar))| {
+                        let b = &mut buf[..ar.len()];
+                        lut_row(table, ar, shift, b, run == Run::Portable);
+                        let t = thr.row(y0 + k, off.1, mask.n);
+                        ordered_row(b, t, s, omax, o, avx2)
+                    })
+                    .sum()
+            }
+        }
     };
-    // One band of whole rows per thread (at least BAND_PIXELS), the first on the calling
-    // thread: the count is a sum of integers, the same in any order.
-    let height = out.len().min(x.len()).div_ceil(w);
+    // Bands of whole rows (at least BAND_PIXELS), BANDS_PER_THREAD per thread, the first
+    // on the calling thread: a thread that starts late (asleep, or its core busy with
+    // another process) still takes the bands left, rather than the caller doing half the
+    // frame after its own half. The count is a sum of integers, the same in any order.
+    let n = out.len().min(x.len());
+    let height = n.div_ceil(w);
     let threads = rayon::current_num_threads().max(1);
-    let band = height.div_ceil(threads).max(BAND_PIXELS.div_ceil(w)).max(1);
+    let band = height
+        .div_ceil(threads * BANDS_PER_THREAD)
+        .max(BAND_PIXELS.div_ceil(w))
+        .max(1);
     if run != Run::Parallel || band >= height {
-        return rows(0, out, x);
+        return rows(0, &mut out[..n], x.part(0, n));
     }
-    let parts = out.chunks_mut(w * band).zip(x.chunks(w * band)).enumerate();
+    let parts = out[..n].chunks_mut(w * band).enumerate().map(|(b, o)| {
+        let from = b * w * band;
+        let xb = x.part(from, from + o.len());
+        (b, (o, xb))
+    });
     run_parts(parts.collect(), |(b, (o, xb))| rows(b * band, o, xb))
         .into_iter()
         .sum()
@@ -210,6 +322,9 @@ pub fn apply_ordered_with(
 
 /// Smallest band of [`apply_ordered`] handed to a thread, in pixels (rounded up to rows).
 const BAND_PIXELS: usize = 1 << 14;
+
+/// Bands of [`apply_ordered`] per thread (when the frame has that many of `BAND_PIXELS`).
+const BANDS_PER_THREAD: usize = 4;
 
 /// The per-value form (inputs with 32 or more fraction bits).
 fn apply_ordered_per_value(

@@ -4,7 +4,7 @@
 //! the same pattern to the ideal value; the stage-local comparison feeds it the fixed
 //! dither's own input.
 
-use super::{Dither, period_mean};
+use super::{Dither, Input, Run, period_mean};
 use crate::config::{DitherKind, HwConfig, Placement};
 use crate::error::Result;
 use crate::scene::Scene;
@@ -61,19 +61,29 @@ impl Stage for DitherStage {
         let d = Dither::new(&hw.dither);
         let f = hw.dither.frac_bits;
         let ff = hw.accumulate.frame.format;
-        let (din, s, omax): (&[u32], u32, u32) = match hw.dither.placement {
+        let (din, s, omax): (Input, u32, u32) = match hw.dither.placement {
             Placement::AfterLut => {
                 let px = taps.fixed.pixels();
-                (&px.codes, px.frac, px.max)
+                // The gamma LUT left its codes unlooked-up: an ordered dither looks them up
+                // row by row in its own pass (error diffusion reads them as a plane).
+                let x = match (px.ready(), px.lut()) {
+                    (None, Some(l)) if d.mask.is_some() => Input::Lut {
+                        acc: l.acc(),
+                        table: &l.table,
+                        shift: l.shift,
+                    },
+                    _ => Input::Codes(px.codes()),
+                };
+                (x, px.frac, px.max)
             }
             Placement::BeforeLut => (
-                &taps.fixed.frame().frame.acc,
+                Input::Codes(&taps.fixed.frame().frame.acc),
                 f + ff.frac_bits,
                 (1u32 << (ff.int_bits - f)) - 1,
             ),
         };
         let mut codes = cx.pool.scratch(din.len(), 0u32);
-        let st = d.apply(din, width, height, s, omax, &mut codes);
+        let st = d.apply_from(din, (width, height), s, omax, &mut codes, Run::Parallel);
         let mut facts = Facts {
             work: vec![("pixels", din.len() as u64)],
             signals: vec![st],
@@ -86,14 +96,15 @@ impl Stage for DitherStage {
         if let Some(m) = &d.mask {
             facts.note("mask_size", m.n);
         }
-        if let Some(pm) = period_mean(&d, din, s, omax) {
+        if let Some(pm) = d
+            .cfg
+            .temporal
+            .then(|| period_mean(&d, &din.to_codes(false), s, omax))
+            .flatten()
+        {
             facts.note("temporal_period_mean", pm);
         }
-        taps.fixed.pixels = Some(Arc::new(PixelTap {
-            codes,
-            frac: 0,
-            max: omax,
-        }));
+        taps.fixed.pixels = Some(Arc::new(PixelTap::new(codes, 0, omax)));
         Ok((Dithered { d, s, omax }, facts))
     }
 
@@ -128,14 +139,14 @@ impl Stage for DitherStage {
     ) -> Option<LocalError> {
         let (width, height) = (cx.layout.grid.width, cx.layout.grid.height);
         let din: &[u32] = match cx.hw.dither.placement {
-            Placement::AfterLut => &input.fixed.pixels().codes,
+            Placement::AfterLut => input.fixed.pixels().codes(),
             Placement::BeforeLut => &input.fixed.frame().frame.acc,
         };
         let scale = (1u64 << x.s) as f64;
         let v: Vec<f64> = din.iter().map(|&c| c as f64 / scale).collect();
         let fl = x.d.apply_f64(&v, width, height, x.omax);
         let mut e = LocalError::default();
-        for (&a, &b) in out.fixed.pixels().codes.iter().zip(&fl) {
+        for (&a, &b) in out.fixed.pixels().codes().iter().zip(&fl) {
             e.add(a as f64, b as f64);
         }
         Some(e.finish())

@@ -3,7 +3,7 @@
 
 use super::diffusion::{FsParams, floyd_steinberg, floyd_steinberg_f64};
 use super::mask::Mask;
-use super::ordered::{Run, apply_ordered_f64, apply_ordered_with, ordered_code};
+use super::ordered::{Input, Run, apply_ordered_f64, apply_ordered_from, ordered_code};
 use crate::config::DitherCfg;
 use crate::fixed::{QFormat, SignalStats};
 use crate::stage::{Cost, MemImage, Memory, Unit};
@@ -58,13 +58,27 @@ impl Dither {
         out: &mut [u32],
         run: Run,
     ) -> SignalStats {
+        self.apply_from(Input::Codes(x), (width, height), s, omax, out, run)
+    }
+
+    /// [`Dither::apply_with`] on an [`Input`] (frame codes through a LUT: an ordered dither
+    /// looks them up row by row in its own pass; error diffusion looks the plane up first).
+    pub fn apply_from(
+        &self,
+        x: Input,
+        (width, height): (u32, u32),
+        s: u32,
+        omax: u32,
+        out: &mut [u32],
+        run: Run,
+    ) -> SignalStats {
         match &self.mask {
             Some(m) => {
-                let sat = apply_ordered_with(x, width, s, omax, m, self.frame(), out, run);
+                let sat = apply_ordered_from(x, width, s, omax, m, self.frame(), out, run);
                 ordered_stats(omax, sat)
             }
             None => floyd_steinberg(
-                x,
+                &x.to_codes(run == Run::Portable),
                 width,
                 height,
                 &FsParams {

@@ -5,12 +5,12 @@
 
 use super::{GammaLut, GammaSpec, apply_powers, lookup, powers, powers_key};
 use super::{extended_lut, reduced_lut};
-use crate::config::HwConfig;
+use crate::config::{DitherKind, HwConfig};
 use crate::error::Result;
 use crate::fnv::Fnv;
 use crate::scene::Scene;
 use crate::stage::logdomain::{LogAdder, log_gamma_linear, log_gamma_lut, log_gamma_lut_extended};
-use crate::stage::taps::{FrameCoding, PixelTap, PixelTapF, Taps};
+use crate::stage::taps::{FrameCoding, LutRead, PixelTap, PixelTapF, Taps};
 use crate::stage::{
     Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, Stage, StageId, Tokens, Unit, memo,
 };
@@ -34,6 +34,12 @@ pub enum Lut {
 
 /// The gamma stage.
 pub struct Gamma;
+
+/// The LUT's codes: a plane, or left to the ordered dither after it to look up.
+enum Codes {
+    Plane(Vec<u32>),
+    Deferred(LutRead),
+}
 
 /// The memo key of a LUT's contents: what they are made from (its kind, the exponent, the
 /// DAC quantiser, the address bits and the extra fraction or dropped address bits `f`), so
@@ -106,16 +112,35 @@ impl Stage for Gamma {
         let mut facts = Facts::default();
         let dither_after = cx.layout.next(StageId::Gamma) == Some(StageId::Dither);
         let dither_before = cx.layout.has(StageId::Dither) && !dither_after;
-        let (lut, codes, px_frac): (Lut, Vec<u32>, u32) = if dither_before {
+        // An ordered dither right after the LUT looks the codes up itself, row by row in its
+        // own pass (`PixelTap::deferred`): the LUT's plane never goes to memory.
+        let fuse = dither_after && !matches!(hw.dither.kind, DitherKind::FloydSteinberg);
+        let frame_tap = taps.fixed.frame.clone();
+        let plane = |table: &Arc<Vec<u32>>, shift: u32| -> Codes {
+            match frame_tap.as_ref().filter(|_| fuse) {
+                Some(frame) => Codes::Deferred(LutRead {
+                    frame: frame.clone(),
+                    table: table.clone(),
+                    shift,
+                }),
+                None => {
+                    let acc = &taps.fixed.frame().frame.acc;
+                    let mut codes = cx.pool.scratch(acc.len(), 0u32);
+                    lookup(table, acc, shift, &mut codes);
+                    Codes::Plane(codes)
+                }
+            }
+        };
+        let (lut, codes, px_frac): (Lut, Codes, u32) = if dither_before {
             let f = hw.dither.frac_bits;
             let lut = memo(cx.memo, lut_key("reduced", &spec, acc_bits, f), || {
                 reduced_lut(&spec, acc_bits, f)
             });
-            let addr = &taps.fixed.pixels().codes;
+            let addr = taps.fixed.pixels().codes();
             let mut codes = cx.pool.scratch(addr.len(), 0u32);
             lookup(&lut.table, addr, 0, &mut codes);
             facts.note("monotone", lut.is_monotone());
-            (Lut::Reduced(lut, f), codes, 0)
+            (Lut::Reduced(lut, f), Codes::Plane(codes), 0)
         } else {
             let frame = taps.fixed.frame();
             let acc = &frame.frame.acc;
@@ -125,8 +150,7 @@ impl Stage for Gamma {
                     let lut = memo(cx.memo, log_lut_key("log extended", &spec, add, f), || {
                         log_gamma_lut_extended(add, &spec, f)
                     });
-                    let mut codes = cx.pool.scratch(acc.len(), 0u32);
-                    lookup(&lut, acc, 0, &mut codes);
+                    let codes = plane(&lut, 0);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("log_input_eq15", true);
                     facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
@@ -140,15 +164,14 @@ impl Stage for Gamma {
                     lookup(&lut, acc, 0, &mut codes);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("log_input_eq15", true);
-                    (Lut::Log(lut, add.clone()), codes, 0)
+                    (Lut::Log(lut, add.clone()), Codes::Plane(codes), 0)
                 }
                 FrameCoding::Linear if dither_after => {
                     let f = hw.dither.frac_bits;
                     let lut = memo(cx.memo, lut_key("extended", &spec, acc_bits, f), || {
                         extended_lut(&spec, acc_bits, f)
                     });
-                    let mut codes = cx.pool.scratch(acc.len(), 0u32);
-                    lookup(&lut, acc, frac, &mut codes);
+                    let codes = plane(&lut, frac);
                     facts.note("monotone", lut.windows(2).all(|w| w[0] <= w[1]));
                     facts.note("output_format", format!("UQ{}.{f}", hw.gamma.dac_bits));
                     (Lut::Extended(lut, f), codes, f)
@@ -166,7 +189,7 @@ impl Stage for Gamma {
                         "first_unreachable",
                         unreachable.iter().take(16).collect::<Vec<_>>(),
                     );
-                    (Lut::Plain(lut), codes, 0)
+                    (Lut::Plain(lut), Codes::Plane(codes), 0)
                 }
             }
         };
@@ -175,14 +198,17 @@ impl Stage for Gamma {
             Lut::Extended(t, _) | Lut::LogExtended(t, _, _) => t.len(),
             Lut::Log(t, _) => t.len(),
         };
-        facts.work = vec![
-            ("lookups", codes.len() as u64),
-            ("lut_entries", entries as u64),
-        ];
-        taps.fixed.pixels = Some(Arc::new(PixelTap {
-            codes,
-            frac: px_frac,
-            max: dac_max,
+        let lookups = match &codes {
+            Codes::Plane(c) => c.len(),
+            Codes::Deferred(l) => {
+                facts.note("lookup", "in the dither's pass, row by row (fused)");
+                l.acc().len()
+            }
+        };
+        facts.work = vec![("lookups", lookups as u64), ("lut_entries", entries as u64)];
+        taps.fixed.pixels = Some(Arc::new(match codes {
+            Codes::Plane(c) => PixelTap::new(c, px_frac, dac_max),
+            Codes::Deferred(l) => PixelTap::deferred(l, px_frac, dac_max),
         }));
         Ok((lut, facts))
     }
@@ -235,11 +261,11 @@ impl Stage for Gamma {
         let spec = GammaSpec::of(cx.scene, hw);
         let (acc_bits, frac) = frame_bits(hw);
         let white = ((1u64 << acc_bits) - 1) as f64;
-        let codes = &out.fixed.pixels().codes;
+        let codes = out.fixed.pixels().codes();
         let mut e = LocalError::default();
         match lut {
             Lut::Reduced(_, f) => {
-                for (&a, &c) in input.fixed.pixels().codes.iter().zip(codes) {
+                for (&a, &c) in input.fixed.pixels().codes().iter().zip(codes) {
                     e.add(
                         c as f64,
                         spec.ideal((((a as u64) << f) as f64 / white).min(1.0)),
