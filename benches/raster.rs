@@ -35,7 +35,7 @@ fn bench(c: &mut Criterion) {
             for prim in q {
                 out.clear();
                 raster::raster(
-                    &setup::setup(prim, &grid, &mut sw),
+                    &setup::setup(prim, &grid, p.guard, &mut sw),
                     &p,
                     &reg,
                     &mut out,

@@ -49,7 +49,7 @@ fn coverage(prims: &[QPrim], p: &RasterParams, reg: &SampleRegion) -> Vec<u32> {
     for q in prims {
         frags.clear();
         raster::raster(
-            &setup::setup(q, &p.grid, &mut sw),
+            &setup::setup(q, &p.grid, p.guard, &mut sw),
             p,
             reg,
             &mut frags,
@@ -166,7 +166,7 @@ fn zero_area_and_degenerate_triangles_draw_nothing() {
     let mut work = SetupWork::default();
     for t in cases {
         assert!(matches!(
-            setup::setup(&QPrim::Triangle(t), &p.grid, &mut work),
+            setup::setup(&QPrim::Triangle(t), &p.grid, p.guard, &mut work),
             setup::Setup::Degenerate
         ));
         assert!(
@@ -202,7 +202,7 @@ fn drift(t: [QVertex; 3], n: u32, w: u32, h: u32, guard: u32) -> (f64, u64, u64)
     let mut rw = RasterWork::default();
     let mut fx: Vec<Frag> = Vec::new();
     raster::raster(
-        &setup::setup(&QPrim::Triangle(t), &p.grid, &mut sw),
+        &setup::setup(&QPrim::Triangle(t), &p.grid, p.guard, &mut sw),
         &p,
         &reg,
         &mut fx,

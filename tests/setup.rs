@@ -26,6 +26,9 @@ use igemu::stage::{Grid, RunOptions, StageId, TokenKind};
 use proptest::prelude::*;
 
 /// Sample grids `(n, sub_bits)`, including the tightest (`sub_bits = log2 n + 1`).
+/// Interpolator guard bits handed to setup (edges do not depend on them).
+const GUARD: u32 = 4;
+
 const GRIDS: [(u32, u32); 7] = [(1, 1), (2, 2), (4, 3), (4, 4), (8, 4), (1, 4), (2, 5)];
 
 /// Walks the edge over all its rows and checks every row against exact integer arithmetic.
@@ -122,18 +125,17 @@ fn qv(x: i64, y: i64, z: i64, i: i64) -> QVertex {
 /// An edge of a set-up triangle: (top, bottom, constants, whether it is a left edge).
 type SideEdge = ((i64, i64), (i64, i64), Edge, bool);
 
-/// The three edges of a set-up triangle, leaving out horizontal edges (they own no row).
-fn edges(t: &TriSetup) -> Vec<SideEdge> {
-    let [v0, v1, v2] = t.sorted;
-    let p = |v: QVertex| (v.x, v.y);
+/// The three edges of triangle `v` as set up in `t`, leaving out horizontal edges (they
+/// own no row).
+fn edges(v: &[QVertex; 3], t: &TriSetup) -> Vec<SideEdge> {
+    let [v0, v1, v2] = setup::sorted(v).map(|p| (p.x, p.y));
     [
         (v0, v2, t.long, t.long_is_left),
         (v0, v1, t.upper, !t.long_is_left),
         (v1, v2, t.lower, !t.long_is_left),
     ]
     .into_iter()
-    .filter(|(a, b, _, _)| a.y < b.y)
-    .map(|(a, b, e, left)| (p(a), p(b), e, left))
+    .filter(|(a, b, _, _)| a.1 < b.1)
     .collect()
 }
 
@@ -158,17 +160,18 @@ fn shared_edges_have_identical_constants_on_opposite_sides() {
         }
         let v = |a: (i64, i64)| qv(a.0, a.1, 0, 0);
         // Each triangle lists its vertices in a different order.
-        let t1 = setup::triangle(&[v(p), v(q), v(r1)], &g).expect("non-degenerate");
-        let t2 = setup::triangle(&[v(r2), v(q), v(p)], &g).expect("non-degenerate");
+        let (v1, v2) = ([v(p), v(q), v(r1)], [v(r2), v(q), v(p)]);
+        let t1 = setup::triangle(&v1, &g, GUARD).expect("non-degenerate");
+        let t2 = setup::triangle(&v2, &g, GUARD).expect("non-degenerate");
         let (top, bot) = if p.1 < q.1 { (p, q) } else { (q, p) };
-        let find = |t: &TriSetup| {
-            edges(t)
+        let find = |v: &[QVertex; 3], t: &TriSetup| {
+            edges(v, t)
                 .into_iter()
                 .find(|e| (e.0, e.1) == (top, bot))
                 .map(|e| (e.2, e.3))
         };
-        let (e1, left1) = find(&t1).expect("the shared edge in the first");
-        let (e2, left2) = find(&t2).expect("the shared edge in the second");
+        let (e1, left1) = find(&v1, &t1).expect("the shared edge in the first");
+        let (e2, left2) = find(&v2, &t2).expect("the shared edge in the second");
         assert_eq!(e1, e2, "{p:?}-{q:?} with {r1:?} / {r2:?}");
         assert_ne!(
             left1, left2,
@@ -243,19 +246,27 @@ fn lines_become_two_triangles_of_the_lines_width() {
         let (a, b) = (qv(c(), c(), 7, 100), qv(c(), c(), 9, 300));
         let width = 1 + (rng.next_u64() % 64) as i64;
         let mut w = SetupWork::default();
-        let s = setup::setup(&QPrim::Line { a, b, width }, &g, &mut w);
+        let s = setup::setup(&QPrim::Line { a, b, width }, &g, GUARD, &mut w);
         assert_eq!((w.triangles, w.lines), (2, 1));
         if a.x == b.x && a.y == b.y {
             assert!(matches!(s, Setup::Degenerate));
             assert_eq!(w.degenerate, 2);
             continue;
         }
-        let Setup::Line(t0, t1) = s else {
+        let Setup::Line(pair) = s else {
             panic!("{s:?}")
         };
+        let [t0, t1] = *pair;
+        // The set-up triangles are those of the line's two triangles.
+        let [p0, p1] = setup::line_triangles(&a, &b, width).expect("not zero length");
+        let set = |v: &[QVertex; 3]| setup::triangle(v, &g, GUARD).expect("non-degenerate");
+        assert_eq!(
+            format!("{:?}", (t0, t1)),
+            format!("{:?}", (set(&p0), set(&p1)))
+        );
         // The parallelogram's area is the major extent times the width.
         let major = (b.x - a.x).abs().max((b.y - a.y).abs());
-        let (s0, s1) = (area2(&t0.sorted), area2(&t1.sorted));
+        let (s0, s1) = (area2(&p0), area2(&p1));
         assert_eq!(
             s0.abs() + s1.abs(),
             2 * major * width,
@@ -263,12 +274,7 @@ fn lines_become_two_triangles_of_the_lines_width() {
         );
         // Its corners: both end points moved along the minor axis by -w/2 and +w - w/2.
         let x_major = (b.x - a.x).abs() >= (b.y - a.y).abs();
-        let mut corners: Vec<(i64, i64)> = t0
-            .sorted
-            .iter()
-            .chain(&t1.sorted)
-            .map(|v| (v.x, v.y))
-            .collect();
+        let mut corners: Vec<(i64, i64)> = p0.iter().chain(&p1).map(|p| (p.x, p.y)).collect();
         corners.sort();
         corners.dedup();
         let mut want = Vec::new();
@@ -284,10 +290,10 @@ fn lines_become_two_triangles_of_the_lines_width() {
         want.sort();
         assert_eq!(corners, want);
         // The diagonal is an edge of both triangles with the same constants.
-        let common: Vec<_> = edges(&t0)
+        let common: Vec<_> = edges(&p0, &t0)
             .into_iter()
             .filter_map(|e0| {
-                edges(&t1)
+                edges(&p1, &t1)
                     .into_iter()
                     .find(|e1| (e1.0, e1.1) == (e0.0, e0.1))
                     .map(|e1| (e0, e1))
@@ -400,7 +406,7 @@ fn light_points_cover_the_samples_whose_centres_are_in_their_square() {
         );
         let size = 1 + (rng.next_u64() % 48) as i64;
         let mut w = SetupWork::default();
-        let Setup::Point(p) = setup::setup(&QPrim::Point { v, size }, &g, &mut w) else {
+        let Setup::Point(p) = setup::setup(&QPrim::Point { v, size }, &g, GUARD, &mut w) else {
             panic!("a point")
         };
         assert_eq!((w.points, w.triangles, p.z, p.i[0]), (1, 0, 3, 40));

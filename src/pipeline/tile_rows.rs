@@ -61,7 +61,10 @@ fn hash_f(h: Fnv, p: &FPrim) -> Fnv {
 fn setup_rows(s: &Setup) -> Option<(i64, i64)> {
     match s {
         Setup::Tri(t) => Some((t.long.k0, t.long.k1)),
-        Setup::Line(a, b) => Some((a.long.k0.min(b.long.k0), a.long.k1.max(b.long.k1))),
+        Setup::Line(pair) => {
+            let [a, b] = &**pair;
+            Some((a.long.k0.min(b.long.k0), a.long.k1.max(b.long.k1)))
+        }
         Setup::Point(p) => Some(p.k),
         Setup::Degenerate => None,
     }

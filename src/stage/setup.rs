@@ -179,10 +179,31 @@ impl Plane {
     }
 }
 
-/// Round-half-up division, `d > 0`.
+/// Round-half-up division, `d > 0` (in 64 bits when the operands fit: the same quotient,
+/// without the 128-bit division routine).
 #[inline]
 fn div_round(n: i128, d: i128) -> i128 {
-    (2 * n + d).div_euclid(2 * d)
+    let (num, den) = (2 * n + d, 2 * d);
+    match (i64::try_from(num), i64::try_from(den)) {
+        (Ok(a), Ok(b)) => a.div_euclid(b) as i128,
+        _ => num.div_euclid(den),
+    }
+}
+
+/// One attribute's interpolator constants, with the raster's guard bits: what the raster
+/// needs of a [`Plane`] (setup evaluates and divides once per primitive; the raster only
+/// adds).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Interp {
+    /// Value at the first left edge's crossing on the triangle's first sample row.
+    pub seed: i64,
+    /// Value at the lower edge's crossing on its first row: the re-seed at the middle vertex
+    /// when the long edge is the right one (0 when the raster never re-seeds).
+    pub reseed: i64,
+    /// Gradient per sample column.
+    pub dx: i64,
+    /// Gradient per sample row.
+    pub dy: i64,
 }
 
 /// A set-up triangle ready for the raster.
@@ -196,12 +217,10 @@ pub struct TriSetup {
     pub lower: Edge,
     /// Whether the long edge is the left one.
     pub long_is_left: bool,
-    /// Intensity plane per channel (intensity-format LSBs; unused channels are 0).
-    pub i: [Plane; 3],
-    /// Depth plane (input z-format LSBs).
-    pub z: Plane,
-    /// Vertices sorted top to bottom (for re-seeding at the middle vertex).
-    pub sorted: [QVertex; 3],
+    /// Intensity interpolator per channel (intensity-format LSBs; unused channels are 0).
+    pub i: [Interp; 3],
+    /// Depth interpolator (input z-format LSBs).
+    pub z: Interp,
 }
 
 /// A set-up light point: a square of samples with a flat value.
@@ -217,14 +236,15 @@ pub struct PointSetup {
     pub i: [i64; 3],
 }
 
-/// Result of setup for one primitive. (Kept unboxed: one per primitive, no per-line allocation.)
+/// Result of setup for one primitive. Triangles, the common case, stay unboxed (no
+/// allocation per primitive); lines, which are few and twice as wide, are boxed.
 #[allow(clippy::large_enum_variant)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub enum Setup {
     /// One triangle.
     Tri(TriSetup),
     /// A line expands to two triangles sharing an edge.
-    Line(TriSetup, TriSetup),
+    Line(Box<[TriSetup; 2]>),
     /// An additive light point.
     Point(PointSetup),
     /// Zero area: nothing to draw.
@@ -263,11 +283,38 @@ impl SetupWork {
     }
 }
 
-/// Sets up a triangle; `None` for zero area.
-pub fn triangle(v: &[QVertex; 3], g: &Grid) -> Option<TriSetup> {
+/// A triangle's vertices in the order setup takes them: top to bottom, ties by `x` (a
+/// canonical order, whatever order the primitive lists them in).
+pub fn sorted(v: &[QVertex; 3]) -> [QVertex; 3] {
     let mut s = *v;
-    // Sort top to bottom; ties by x so the order is canonical.
     s.sort_by_key(|p| (p.y, p.x));
+    s
+}
+
+/// The two triangles a line of `width` units from `a` to `b` expands to (`None` for zero
+/// length): a parallelogram whose minor-axis extent is exactly `width` units at every
+/// position along the major axis, so the coverage per sample column / row is constant.
+pub fn line_triangles(a: &QVertex, b: &QVertex, width: i64) -> Option<[[QVertex; 3]; 2]> {
+    let (dx, dy) = ((b.x - a.x).abs(), (b.y - a.y).abs());
+    if dx == 0 && dy == 0 {
+        return None;
+    }
+    let lo = width / 2;
+    let hi = width - lo;
+    let off = |v: &QVertex, d: i64| {
+        if dx >= dy {
+            QVertex { y: v.y + d, ..*v }
+        } else {
+            QVertex { x: v.x + d, ..*v }
+        }
+    };
+    let (a0, a1, b0, b1) = (off(a, -lo), off(a, hi), off(b, -lo), off(b, hi));
+    Some([[a0, b0, b1], [a0, b1, a1]])
+}
+
+/// Sets up a triangle with `guard` interpolator guard bits; `None` for zero area.
+pub fn triangle(v: &[QVertex; 3], g: &Grid, guard: u32) -> Option<TriSetup> {
+    let s = sorted(v);
     let [v0, v1, v2] = s;
     let cross = (v1.x - v0.x) as i128 * (v2.y - v0.y) as i128
         - (v2.x - v0.x) as i128 * (v1.y - v0.y) as i128;
@@ -289,29 +336,49 @@ pub fn triangle(v: &[QVertex; 3], g: &Grid) -> Option<TriSetup> {
             }
         }
     };
+    let (long, upper, lower) = (e(v0, v2), e(v0, v1), e(v1, v2));
+    let long_is_left = cross > 0;
+    // Where the raster seeds its interpolators: the first left edge on the first row (the
+    // upper edge unless it owns no row, then the lower one, which starts on that row), and
+    // the lower edge on its first row when the left edge changes at the middle vertex.
+    let first_left = if long_is_left {
+        long
+    } else if upper.k0 < upper.k1 {
+        upper
+    } else {
+        lower
+    };
+    let at = |e: &Edge, k: i64| ((2 * e.q + 1) * g.h, (2 * k + 1) * g.h);
+    let seed_at = at(&first_left, long.k0);
+    let reseed_at = (!long_is_left && lower.k0 < lower.k1).then(|| at(&lower, lower.k0));
+    let interp = |pl: Plane| Interp {
+        seed: pl.eval(seed_at.0, seed_at.1, guard),
+        reseed: reseed_at.map_or(0, |(x, y)| pl.eval(x, y, guard)),
+        dx: pl.dx(2 * g.h, guard),
+        dy: pl.dy(2 * g.h, guard),
+    };
     Some(TriSetup {
-        long: e(v0, v2),
-        upper: e(v0, v1),
-        lower: e(v1, v2),
-        long_is_left: cross > 0,
+        long,
+        upper,
+        lower,
+        long_is_left,
         i: std::array::from_fn(|c| {
             if s.iter().all(|p| p.i[c] == 0) {
-                Plane::constant(s[0].x, s[0].y, 0)
+                Interp::default()
             } else {
-                Plane::new(&s, |p| p.i[c])
+                interp(Plane::new(&s, |p| p.i[c]))
             }
         }),
-        z: Plane::new(&s, |p| p.z),
-        sorted: s,
+        z: interp(Plane::new(&s, |p| p.z)),
     })
 }
 
-/// Sets up one primitive.
-pub fn setup(p: &QPrim, g: &Grid, work: &mut SetupWork) -> Setup {
+/// Sets up one primitive with `guard` interpolator guard bits.
+pub fn setup(p: &QPrim, g: &Grid, guard: u32, work: &mut SetupWork) -> Setup {
     match p {
         QPrim::Triangle(v) => {
             work.triangles += 1;
-            match triangle(v, g) {
+            match triangle(v, g, guard) {
                 Some(t) => Setup::Tri(t),
                 None => {
                     work.degenerate += 1;
@@ -322,25 +389,12 @@ pub fn setup(p: &QPrim, g: &Grid, work: &mut SetupWork) -> Setup {
         QPrim::Line { a, b, width } => {
             work.lines += 1;
             work.triangles += 2;
-            let (dx, dy) = ((b.x - a.x).abs(), (b.y - a.y).abs());
-            if dx == 0 && dy == 0 {
+            let Some([p0, p1]) = line_triangles(a, b, *width) else {
                 work.degenerate += 2;
                 return Setup::Degenerate;
-            }
-            // A parallelogram whose minor-axis extent is exactly `width` units at every
-            // position along the major axis: constant coverage per sample column / row.
-            let lo = width / 2;
-            let hi = width - lo;
-            let off = |v: &QVertex, d: i64| {
-                if dx >= dy {
-                    QVertex { y: v.y + d, ..*v }
-                } else {
-                    QVertex { x: v.x + d, ..*v }
-                }
             };
-            let (a0, a1, b0, b1) = (off(a, -lo), off(a, hi), off(b, -lo), off(b, hi));
-            match (triangle(&[a0, b0, b1], g), triangle(&[a0, b1, a1], g)) {
-                (Some(t0), Some(t1)) => Setup::Line(t0, t1),
+            match (triangle(&p0, g, guard), triangle(&p1, g, guard)) {
+                (Some(t0), Some(t1)) => Setup::Line(Box::new([t0, t1])),
                 _ => {
                     work.degenerate += 2;
                     Setup::Degenerate
@@ -384,7 +438,7 @@ impl Stage for SetupStage {
     }
 
     fn key(&self, cx: &Cx) -> serde_json::Value {
-        serde_json::json!({"grid": cx.layout.grid})
+        serde_json::json!({"grid": cx.layout.grid, "guard": cx.hw.raster.interp_guard_bits})
     }
 
     fn fixed(&self, cx: &Cx, taps: &mut Taps) -> Result<(usize, Facts)> {
@@ -393,11 +447,11 @@ impl Stage for SetupStage {
         // On every core, straight into the pooled list; the counts follow from each
         // primitive and its setup (integers, the same on any thread count).
         let mut setups: Vec<Setup> = cx.pool.take(prims.len());
-        let g = &cx.layout.grid;
+        let (g, guard) = (&cx.layout.grid, cx.hw.raster.interp_guard_bits);
         setups.par_extend(
             prims
                 .par_iter()
-                .map(|p| setup(p, g, &mut SetupWork::default())),
+                .map(|p| setup(p, g, guard, &mut SetupWork::default())),
         );
         for (p, s) in prims.iter().zip(&setups) {
             w.tally(p, s);
@@ -488,7 +542,7 @@ mod tests {
         ];
         let (mut by_setup, mut by_tally) = (SetupWork::default(), SetupWork::default());
         for p in &prims {
-            let s = setup(p, &g, &mut by_setup);
+            let s = setup(p, &g, 2, &mut by_setup);
             by_tally.tally(p, &s);
         }
         let c = |w: SetupWork| (w.triangles, w.degenerate, w.lines, w.points);

@@ -118,36 +118,17 @@ pub fn raster_tri_rows(
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
-    let g = &p.grid;
-    let h2 = 2 * g.h;
     let (mut long, mut upper, mut lower) = (t.long, t.upper, t.lower);
     let (k_start, k_end) = (long.k0, long.k1.min(rows.1));
     if k_start >= k_end || (!above && k_end <= rows.0) {
         return;
     }
-    // Column and row gradients with guard bits (setup-time divisions).
+    // Column and row gradients and the seeds come from setup (its divisions, once per
+    // primitive); the raster adds.
     let nc = p.channels;
-    let di: [(i64, i64); 3] = std::array::from_fn(|c| {
-        if c < nc {
-            (t.i[c].dx(h2, p.guard), t.i[c].dy(h2, p.guard))
-        } else {
-            (0, 0)
-        }
-    });
-    let dz = (t.z.dx(h2, p.guard), t.z.dy(h2, p.guard));
-    let x_of = |c: i64| (2 * c + 1) * g.h;
-    let y_of = |k: i64| (2 * k + 1) * g.h;
+    let di: [(i64, i64); 3] = std::array::from_fn(|c| (t.i[c].dx, t.i[c].dy));
+    let dz = (t.z.dx, t.z.dy);
     let mut in_upper = upper.k0 < upper.k1 && k_start < upper.k1;
-    let seed = |e: &Edge, k: i64| {
-        let i: [i64; 3] = std::array::from_fn(|c| {
-            if c < nc {
-                t.i[c].eval(x_of(e.q), y_of(k), p.guard)
-            } else {
-                0
-            }
-        });
-        (i, t.z.eval(x_of(e.q), y_of(k), p.guard))
-    };
     let first_left = if t.long_is_left {
         long
     } else if in_upper {
@@ -155,7 +136,7 @@ pub fn raster_tri_rows(
     } else {
         lower
     };
-    let (mut vi, mut vz) = seed(&first_left, k_start);
+    let (mut vi, mut vz) = (t.i.map(|a| a.seed), t.z.seed);
     let mut interp = EdgeInterp::new(&first_left, &di, dz);
     let width = reg.width();
     let mut k = k_start;
@@ -214,8 +195,8 @@ pub fn raster_tri_rows(
             lower.step()
         };
         if !t.long_is_left && switch {
-            // The left edge changes at the middle vertex: re-seed (a setup operation).
-            (vi, vz) = seed(&lower, k);
+            // The left edge changes at the middle vertex: re-seed (setup's value).
+            (vi, vz) = (t.i.map(|a| a.reseed), t.z.reseed);
             interp = EdgeInterp::new(&lower, &di, dz);
             if above || k >= rows.0 {
                 w.reseeds += 1;
@@ -288,9 +269,10 @@ pub fn raster_rows(
 ) {
     match s {
         Setup::Tri(t) => raster_tri_rows(t, p, reg, rows, above, out, w),
-        Setup::Line(a, b) => {
-            raster_tri_rows(a, p, reg, rows, above, out, w);
-            raster_tri_rows(b, p, reg, rows, above, out, w);
+        Setup::Line(pair) => {
+            for t in pair.iter() {
+                raster_tri_rows(t, p, reg, rows, above, out, w);
+            }
         }
         Setup::Point(pt) => raster_point(pt, p, reg, rows, out, w),
         Setup::Degenerate => {}
