@@ -91,18 +91,22 @@ impl AccParams {
         }
     }
 
-    /// [`AccParams::product`] recording into a row's [`ProductStats`] (the same values).
-    #[inline]
+    /// [`AccParams::product`] recording into a row's [`ProductStats`] (the same values:
+    /// the exact value is scaled by `2^-sh` with a multiplication, exact like the division
+    /// by `2^sh`).
+    #[inline(always)]
     pub(super) fn product_row(&self, sum: i64, stats: &mut ProductStats) -> i64 {
         let sh = self.shift();
         if sh <= 0 {
-            let v = (sum as i128) << (-sh);
+            let v = ((sum as i128) << (-sh)) as i64;
             stats.record(v as f64, v);
-            v as i64
+            v
         } else {
-            let r = round_shift_i64(sum, sh as u32, self.frame.quant) as i128;
-            stats.record(sum as f64 / (1u64 << sh) as f64, r);
-            r as i64
+            let r = round_shift_i64(sum, sh as u32, self.frame.quant);
+            // 2^-sh from its exponent bits (0 < sh < 63).
+            let scale = f64::from_bits((1023 - sh as u64) << 52);
+            stats.record(sum as f64 * scale, r);
+            r
         }
     }
 
@@ -186,7 +190,7 @@ impl AccParams {
 }
 
 /// `acc + part` in the word of `q` with its overflow mode, named `signal` in an error.
-#[inline]
+#[inline(always)]
 fn add_in(q: &Quantizer, signal: &str, acc: i64, part: i64, overflows: &mut u64) -> Result<i64> {
     let r = q.handle_overflow(acc as i128 + part as i128);
     if r.overflow {

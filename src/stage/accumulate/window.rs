@@ -3,13 +3,16 @@
 //!
 //! The window is `base x base` blocks of `n x n` samples; which primitive owns each block
 //! (or that it crosses an edge) is found once per block of a pixel row
-//! ([`block_ids_n`]). A window whose blocks all belong to one primitive (most windows) is
-//! one dot product. Otherwise one pass over the window finds its smallest primitive id,
-//! and each further pass sums one primitive's samples (the dot product masked to them) and
-//! finds the next larger id, so the primitives come out in id order. The sums are exact
-//! integers, so this is the same as grouping every sample by primitive. Every pass runs
-//! branch-free over a window of constant size (`n` and the base are const parameters) in a
-//! [`Word`] that provably holds the sums, so the compiler vectorises it.
+//! ([`block_ids_n`]). A window whose blocks all belong to one primitive is one dot
+//! product. Otherwise a first pass sums the whole window and finds its smallest and
+//! largest primitive ids, and each further pass sums one primitive's samples (the dot
+//! product masked to them) and finds the next larger id, so the primitives come out in id
+//! order; the largest id's sum is the whole less the others' (a window of `k` primitives
+//! takes `k` passes). The sums are exact integers, so this is the same as grouping every
+//! sample by primitive. Every pass runs branch-free over a window of constant size (`n`
+//! and the base are const parameters) in a [`Word`] that provably holds the sums, keeping
+//! lane-wise partial results that are combined once per window, so the compiler
+//! vectorises it.
 
 use super::kernel::Kernel;
 use crate::fixed::SignalStats;
@@ -24,6 +27,8 @@ pub(super) trait Word: Copy + Default {
     fn prod(w: i32, i: u32) -> Self;
     /// `self + o`.
     fn add(self, o: Self) -> Self;
+    /// `self - o`.
+    fn sub(self, o: Self) -> Self;
     /// `self` where `on`, else zero.
     fn keep(self, on: bool) -> Self;
     /// The sum as the rounding's input.
@@ -44,6 +49,10 @@ macro_rules! word {
             #[inline(always)]
             fn add(self, o: Self) -> Self {
                 self.wrapping_add(o)
+            }
+            #[inline(always)]
+            fn sub(self, o: Self) -> Self {
+                self.wrapping_sub(o)
             }
             #[inline(always)]
             fn keep(self, on: bool) -> Self {
@@ -125,20 +134,39 @@ impl WindowSums {
             }
         }
         if uniform {
-            let (dot, _) = w.pass::<W, false>(0);
-            self.frags.push((first as u32, dot.to_i64()));
+            self.frags
+                .push((first as u32, w.first::<W>().whole.to_i64()));
             return;
         }
-        // The window's primitives in increasing id order: each pass sums the current one's
-        // samples and finds the next larger id (every pass reads the whole window,
-        // branch-free).
-        let (_, mut next) = w.pass::<W, false>(0);
-        while let Some(id) = next {
-            let (s, n) = w.pass::<W, true>(id);
-            self.frags.push((id, s.to_i64()));
-            next = n;
+        // The window's primitives in increasing id order: the first pass sums the whole
+        // window and finds its smallest and largest ids; each further pass sums one
+        // primitive's samples and finds the next larger id (every pass reads the whole
+        // window, branch-free). The largest id's sum is what the others leave of the whole
+        // (exact integers), so a window of `k` primitives takes `k` passes.
+        let f = w.first::<W>();
+        if !f.found {
+            return;
         }
+        let (mut rest, mut id) = (f.whole, f.lo);
+        while id != f.hi {
+            let (s, n) = w.pass::<W>(id);
+            self.frags.push((id, s.to_i64()));
+            rest = rest.sub(s);
+            id = n.expect("the largest id lies above every other");
+        }
+        self.frags.push((f.hi, rest.to_i64()));
     }
+}
+
+/// What the first pass over a mixed window finds ([`Window::first`]).
+struct First<W> {
+    /// Sum of `w * I` over the window.
+    whole: W,
+    /// Whether any sample has a non-zero weight.
+    found: bool,
+    /// Smallest and largest ids among the samples of non-zero weight.
+    lo: u32,
+    hi: u32,
 }
 
 /// One pixel's window: `N x N`-sample blocks, `B x B` of them, first sample at `base`.
@@ -151,35 +179,75 @@ struct Window<'a, const N: usize, const B: usize> {
     sw: usize,
 }
 
-impl<const N: usize, const B: usize> Window<'_, N, B> {
-    /// One pass over the window. `MASKED`: the sum of `w * I` over primitive `id`'s
-    /// samples and the smallest id above `id` among the samples of non-zero weight;
-    /// otherwise the whole window's sum and its smallest such id (`None`: no larger id, or
-    /// no sample of non-zero weight).
+impl<'a, const N: usize, const B: usize> Window<'a, N, B> {
+    /// The window's sample rows: each row's intensities, ids, weights and non-zero masks.
     #[inline(always)]
-    fn pass<W: Word, const MASKED: bool>(&self, id: u32) -> (W, Option<u32>) {
+    fn rows(&self) -> impl Iterator<Item = (&'a [u32], &'a [u32], &'a [i32], &'a [u32])> {
         let size = N * B;
-        let (kw, nz) = (&self.kw[..size * size], &self.nz[..size * size]);
-        let mut acc = W::default();
-        let mut next = u32::MAX;
-        let mut found = 0u32;
-        for j in 0..size {
-            let row = self.base + j * self.sw;
-            let (is, ps) = (&self.inten[row..row + size], &self.prim[row..row + size]);
-            let (ws, nzs) = (&kw[j * size..(j + 1) * size], &nz[j * size..(j + 1) * size]);
-            for t in 0..size {
-                let v = W::prod(ws[t], is[t]);
-                acc = acc.add(if MASKED { v.keep(ps[t] == id) } else { v });
-                // Candidates: samples of non-zero weight (above `id` when masked).
-                let above = if MASKED { ps[t] > id } else { true };
-                let cand = nzs[t] & 0u32.wrapping_sub(u32::from(above));
-                found |= cand;
-                next = next.min(ps[t] | !cand);
+        let (inten, prim, kw, nz) = (self.inten, self.prim, self.kw, self.nz);
+        let (base, sw) = (self.base, self.sw);
+        (0..size).map(move |j| {
+            let row = base + j * sw;
+            let k = j * size..(j + 1) * size;
+            (
+                &inten[row..row + size],
+                &prim[row..row + size],
+                &kw[k.clone()],
+                &nz[k],
+            )
+        })
+    }
+
+    /// The first pass over the window: its whole sum and, for a mixed window, its
+    /// smallest and largest ids among the samples of non-zero weight. Partial results stay
+    /// lane-wise until the window's end (the adds wrap, the min, max and or are exact, so
+    /// any order gives the same values).
+    #[inline(always)]
+    fn first<W: Word>(&self) -> First<W> {
+        let mut whole = [W::default(); LANES];
+        let (mut lo, mut hi, mut found) = ([u32::MAX; LANES], [0u32; LANES], [0u32; LANES]);
+        for (is, ps, ws, nzs) in self.rows() {
+            for t in 0..N * B {
+                let l = t % LANES;
+                whole[l] = whole[l].add(W::prod(ws[t], is[t]));
+                let cand = nzs[t];
+                found[l] |= cand;
+                lo[l] = lo[l].min(ps[t] | !cand);
+                hi[l] = hi[l].max(ps[t] & cand);
             }
         }
-        (acc, (found != 0).then_some(next))
+        First {
+            whole: whole.into_iter().fold(W::default(), W::add),
+            found: found.into_iter().fold(0, |a, b| a | b) != 0,
+            lo: lo.into_iter().fold(u32::MAX, u32::min),
+            hi: hi.into_iter().fold(0, u32::max),
+        }
+    }
+
+    /// One pass for primitive `id`: the sum of `w * I` over its samples and the smallest
+    /// id above `id` among the samples of non-zero weight (`None`: no larger id).
+    #[inline(always)]
+    fn pass<W: Word>(&self, id: u32) -> (W, Option<u32>) {
+        let mut acc = [W::default(); LANES];
+        let (mut next, mut found) = ([u32::MAX; LANES], [0u32; LANES]);
+        for (is, ps, ws, nzs) in self.rows() {
+            for t in 0..N * B {
+                let l = t % LANES;
+                acc[l] = acc[l].add(W::prod(ws[t], is[t]).keep(ps[t] == id));
+                let cand = nzs[t] & 0u32.wrapping_sub(u32::from(ps[t] > id));
+                found[l] |= cand;
+                next[l] = next[l].min(ps[t] | !cand);
+            }
+        }
+        let sum = acc.into_iter().fold(W::default(), W::add);
+        let next = next.into_iter().fold(u32::MAX, u32::min);
+        let found = found.into_iter().fold(0, |a, b| a | b);
+        (sum, (found != 0).then_some(next))
     }
 }
+
+/// Lanes of a window pass's partial results (one AVX2 register of 32-bit values).
+const LANES: usize = 8;
 
 /// The ids of the `n x n` blocks (`n = N`) of the windows of `pixels` pixels of one pixel
 /// row: `ids[by * cols + g]` is the primitive owning all samples of block row `by`, block
@@ -193,14 +261,14 @@ pub(super) fn block_ids_n<const N: usize, const B: usize>(
     pixels: usize,
     ids: &mut Vec<u64>,
 ) {
-    let blocks = B;
-    let cols = pixels + blocks - 1;
+    let cols = pixels + B - 1;
     ids.clear();
-    for by in 0..blocks {
+    ids.resize(B * cols, MIXED);
+    for (by, out) in ids.chunks_exact_mut(cols).enumerate() {
         let r0 = base + by * N * sw;
         let end = r0 + (N - 1) * sw + cols * N;
         let band = &prim[r0..end];
-        for g in 0..cols {
+        for (g, id) in out.iter_mut().enumerate() {
             let first = band[g * N];
             let mut diff = 0u32;
             for sy in 0..N {
@@ -211,7 +279,7 @@ pub(super) fn block_ids_n<const N: usize, const B: usize>(
                     diff |= id ^ first;
                 }
             }
-            ids.push(if diff == 0 { first as u64 } else { MIXED });
+            *id = if diff == 0 { first as u64 } else { MIXED };
         }
     }
 }
@@ -225,8 +293,8 @@ pub(super) const MIXED: u64 = u64::MAX;
 /// `SignalStats`.
 pub(super) struct ProductStats {
     count: u64,
-    min: i128,
-    max: i128,
+    min: i64,
+    max: i64,
     err_sum: f64,
     err_sq_sum: f64,
 }
@@ -236,16 +304,16 @@ impl ProductStats {
     pub fn new() -> Self {
         Self {
             count: 0,
-            min: i128::MAX,
-            max: i128::MIN,
+            min: i64::MAX,
+            max: i64::MIN,
             err_sum: 0.0,
             err_sq_sum: 0.0,
         }
     }
 
     /// Records one rounding (as `SignalStats::record(exact_lsb, rounded, false)`).
-    #[inline]
-    pub fn record(&mut self, exact_lsb: f64, rounded: i128) {
+    #[inline(always)]
+    pub fn record(&mut self, exact_lsb: f64, rounded: i64) {
         self.count += 1;
         self.min = self.min.min(rounded);
         self.max = self.max.max(rounded);
@@ -259,8 +327,8 @@ impl ProductStats {
         let mut s = template.clone();
         s.count = self.count;
         if self.count > 0 {
-            s.min = Some(self.min);
-            s.max = Some(self.max);
+            s.min = Some(self.min.into());
+            s.max = Some(self.max.into());
         }
         s.err_sum = self.err_sum;
         s.err_sq_sum = self.err_sq_sum;
