@@ -142,18 +142,6 @@ impl Plane {
         }
     }
 
-    /// A constant plane.
-    pub fn constant(x: i64, y: i64, value: i64) -> Self {
-        Self {
-            x0: x,
-            y0: y,
-            num0: value as i128,
-            nx: 0,
-            ny: 0,
-            det: 1,
-        }
-    }
-
     /// Value at `(x, y)` units with `g` extra fraction bits, rounded to nearest (setup only: multiplies).
     pub fn eval(&self, x: i64, y: i64, g: u32) -> i64 {
         let num = self.num0 + self.nx * (x - self.x0) as i128 + self.ny * (y - self.y0) as i128;
@@ -336,41 +324,47 @@ pub fn triangle(v: &[QVertex; 3], g: &Grid, guard: u32) -> Option<TriSetup> {
             }
         }
     };
-    let (long, upper, lower) = (e(v0, v2), e(v0, v1), e(v1, v2));
-    let long_is_left = cross > 0;
-    // Where the raster seeds its interpolators: the first left edge on the first row (the
-    // upper edge unless it owns no row, then the lower one, which starts on that row), and
-    // the lower edge on its first row when the left edge changes at the middle vertex.
-    let first_left = if long_is_left {
-        long
-    } else if upper.k0 < upper.k1 {
-        upper
-    } else {
-        lower
+    let mut t = TriSetup {
+        long: e(v0, v2),
+        upper: e(v0, v1),
+        lower: e(v1, v2),
+        long_is_left: cross > 0,
+        i: [Interp::default(); 3],
+        z: Interp::default(),
     };
+    // Where the raster seeds its interpolators: the first left edge on the first row, and
+    // the lower edge on its first row when the left edge changes at the middle vertex.
     let at = |e: &Edge, k: i64| ((2 * e.q + 1) * g.h, (2 * k + 1) * g.h);
-    let seed_at = at(&first_left, long.k0);
-    let reseed_at = (!long_is_left && lower.k0 < lower.k1).then(|| at(&lower, lower.k0));
+    let seed_at = at(t.first_left(), t.long.k0);
+    let reseed_at = (!t.long_is_left && t.lower.k0 < t.lower.k1).then(|| at(&t.lower, t.lower.k0));
     let interp = |pl: Plane| Interp {
         seed: pl.eval(seed_at.0, seed_at.1, guard),
         reseed: reseed_at.map_or(0, |(x, y)| pl.eval(x, y, guard)),
         dx: pl.dx(2 * g.h, guard),
         dy: pl.dy(2 * g.h, guard),
     };
-    Some(TriSetup {
-        long,
-        upper,
-        lower,
-        long_is_left,
-        i: std::array::from_fn(|c| {
-            if s.iter().all(|p| p.i[c] == 0) {
-                Interp::default()
-            } else {
-                interp(Plane::new(&s, |p| p.i[c]))
-            }
-        }),
-        z: interp(Plane::new(&s, |p| p.z)),
-    })
+    for c in 0..3 {
+        if s.iter().any(|p| p.i[c] != 0) {
+            t.i[c] = interp(Plane::new(&s, |p| p.i[c]));
+        }
+    }
+    t.z = interp(Plane::new(&s, |p| p.z));
+    Some(t)
+}
+
+impl TriSetup {
+    /// The left edge on the triangle's first row, where the raster seeds its interpolators:
+    /// the long edge when it is the left one, else the upper edge unless it owns no row,
+    /// then the lower one (which starts on that row).
+    pub fn first_left(&self) -> &Edge {
+        if self.long_is_left {
+            &self.long
+        } else if self.upper.k0 < self.upper.k1 {
+            &self.upper
+        } else {
+            &self.lower
+        }
+    }
 }
 
 /// Sets up one primitive with `guard` interpolator guard bits.

@@ -129,15 +129,8 @@ pub fn raster_tri_rows(
     let di: [(i64, i64); 3] = std::array::from_fn(|c| (t.i[c].dx, t.i[c].dy));
     let dz = (t.z.dx, t.z.dy);
     let mut in_upper = upper.k0 < upper.k1 && k_start < upper.k1;
-    let first_left = if t.long_is_left {
-        long
-    } else if in_upper {
-        upper
-    } else {
-        lower
-    };
     let (mut vi, mut vz) = (t.i.map(|a| a.seed), t.z.seed);
-    let mut interp = EdgeInterp::new(&first_left, &di, dz);
+    let mut interp = EdgeInterp::new(t.first_left(), &di, dz);
     let width = reg.width();
     let mut k = k_start;
     loop {
