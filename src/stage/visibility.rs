@@ -52,6 +52,18 @@ impl Samples {
             i: pool.filled(n, background_i),
         }
     }
+
+    /// A buffer whose planes hold whatever their pooled buffers held: every sample must be
+    /// set (by [`Part::clear`] over [`parts`] that cover it) before it is read.
+    fn uncleared(reg: SampleRegion, pool: &super::Pool) -> Self {
+        let n = reg.len();
+        Self {
+            reg,
+            z: pool.scratch(n, u32::MAX),
+            prim: pool.scratch(n, BACKGROUND),
+            i: pool.scratch(n, 0),
+        }
+    }
 }
 
 /// The float sample buffer.
@@ -187,13 +199,19 @@ pub struct Part<'a> {
 /// Splits the buffer (and the other channels' intensity planes `extra`) at the ends of the
 /// fragment parts' sample ranges `bounds` (disjoint and in order, as the fixed raster's row
 /// bands are): part `j` holds the samples from the previous range's end to range `j`'s end
-/// (the last part to the end of the buffer).
+/// (the last part to the end of the buffer; with no ranges, one part holds the buffer).
 pub fn parts<'a>(
     buf: &'a mut Samples,
     extra: &'a mut [Vec<u32>],
     bounds: &[(usize, usize)],
 ) -> Vec<Part<'a>> {
     let n = buf.z.len();
+    let whole = [(0, n)];
+    let bounds = if bounds.is_empty() {
+        &whole[..]
+    } else {
+        bounds
+    };
     let (mut z, mut prim, mut i) = (&mut buf.z[..], &mut buf.prim[..], &mut buf.i[..]);
     let mut more: Vec<&mut [u32]> = extra.iter_mut().map(|e| &mut e[..]).collect();
     let mut out = Vec::with_capacity(bounds.len());
@@ -225,6 +243,19 @@ pub fn parts<'a>(
         s0 = end;
     }
     out
+}
+
+impl Part<'_> {
+    /// Clears the part's samples: nothing in depth, the background's id, and channel
+    /// `c`'s background intensity `bg[c]`.
+    pub fn clear(&mut self, bg: &[u32]) {
+        self.z.fill(u32::MAX);
+        self.prim.fill(BACKGROUND);
+        self.i.fill(bg[0]);
+        for (plane, &b) in self.extra.iter_mut().zip(&bg[1..]) {
+            plane.fill(b);
+        }
+    }
 }
 
 /// Depth-tests `frags`, fragments of surface `prim` that fall in `part`, into it (channel
@@ -393,10 +424,12 @@ impl Stage for Visibility {
         let mut w = VisWork::default();
         let reg = cx.layout.samples;
         let channels = cx.layout.channels;
-        let mut buf = Samples::cleared(reg, prims.bg[0], cx.pool);
+        // The planes are cleared part by part on the threads that resolve into them.
+        let mut buf = Samples::uncleared(reg, cx.pool);
         let mut extra: Vec<Vec<u32>> = (1..channels)
-            .map(|c| cx.pool.filled(reg.len(), prims.bg[c]))
+            .map(|_| cx.pool.scratch(reg.len(), 0))
             .collect();
+        let bg_codes = prims.bg;
         let n = prims.q.len();
         let surface = |p: usize| !matches!(prims.q[p], QPrim::Point { .. });
         let mut tests: Vec<u64> = (0..n)
@@ -406,10 +439,17 @@ impl Stage for Visibility {
         // The raster's parts are bands of sample rows: each part of the buffer resolves its
         // own band's fragments, surface by surface in primitive order; the counts are
         // integers summed in part order.
-        let done: Vec<VisWork> = parts(&mut buf, &mut extra, &frags.bounds)
+        let mut cut = parts(&mut buf, &mut extra, &frags.bounds);
+        // Parts without fragments (none when the raster's bands cover the region) are
+        // cleared here.
+        for part in cut.iter_mut().skip(frags.parts.len()) {
+            part.clear(&bg_codes);
+        }
+        let done: Vec<VisWork> = cut
             .into_par_iter()
             .zip(frags.parts.par_iter().zip(&frags.spans))
             .map(|(mut part, (data, spans))| {
+                part.clear(&bg_codes);
                 let mut wk = VisWork::default();
                 for sp in spans.iter().filter(|sp| surface(sp.prim as usize)) {
                     resolve(&data[sp.a..sp.b], sp.prim + 1, &zc, &mut part, &mut wk);

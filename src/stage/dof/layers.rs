@@ -144,7 +144,8 @@ pub fn plan_layers_in(
     }
     keys.sort_unstable_by(|a, b| b.cmp(a));
     keys.dedup();
-    let sig = |k: u32| lens.sigma_code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
+    let coder = lens.sigma_coder();
+    let sig = |k: u32| coder.code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
     // Every layer's mask lies between the masks of its ends (sigma is monotone in depth),
     // so the largest mask over the depth codes present bounds them all: check it before any
     // mask is built (a huge lens would otherwise allocate huge masks), and name it, so that
@@ -286,23 +287,23 @@ pub struct LayerWork {
 
 /// The layers [`layered_fixed`](super::layered_fixed) processes, in its order, with their boxes.
 pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWork> {
-    plan.layers
-        .iter()
+    layer_boxes(width, height, plan)
+        .into_iter()
         .enumerate()
-        .filter_map(|(l, layer)| {
-            let all = plan.background == Some(l);
-            let m = plan.margin(layer.m);
-            let (x0, y0, x1, y1) = layer_box(width, height, &plan.index, l, m, all)?;
+        .filter_map(|(l, b)| {
+            let (x0, y0, x1, y1) = b?;
             Some(LayerWork {
                 pixels: ((x1 - x0) * (y1 - y0)) as u64,
-                taps: 2 * layer.m as u32 + 1,
+                taps: 2 * plan.layers[l].m as u32 + 1,
                 skipped: plan.skipped.get(l).copied().unwrap_or(0),
             })
         })
         .collect()
 }
 
-/// [`layer_box`] of every layer of `plan` in one pass over the index image.
+/// The bounding box (x0, y0, x1, y1 exclusive) of every layer's input in one pass over the
+/// index image, widened by the layer's [`LayerPlan::margin`] and clipped (the whole image
+/// for the background's layer; `None` for a layer without pixels).
 pub(super) fn layer_boxes(
     w: usize,
     h: usize,
@@ -310,15 +311,22 @@ pub(super) fn layer_boxes(
 ) -> Vec<Option<(usize, usize, usize, usize)>> {
     let n = plan.layers.len();
     let mut b = vec![(usize::MAX, usize::MAX, 0usize, 0usize); n];
-    for y in 0..h {
-        for (x, &l) in plan.index[y * w..(y + 1) * w].iter().enumerate() {
-            let Some(e) = b.get_mut(l as usize) else {
-                continue;
-            };
-            e.0 = e.0.min(x);
-            e.1 = e.1.min(y);
-            e.2 = e.2.max(x + 1);
-            e.3 = e.3.max(y + 1);
+    // A row is taken in runs of one layer (most of a row is): a box grows once per run.
+    for (y, row) in plan.index.chunks_exact(w.max(1)).take(h).enumerate() {
+        let mut x = 0;
+        while x < row.len() {
+            let l = row[x];
+            let end = row[x..]
+                .iter()
+                .position(|&v| v != l)
+                .map_or(row.len(), |k| x + k);
+            if let Some(e) = b.get_mut(l as usize) {
+                e.0 = e.0.min(x);
+                e.1 = e.1.min(y);
+                e.2 = e.2.max(end);
+                e.3 = e.3.max(y + 1);
+            }
+            x = end;
         }
     }
     b.into_iter()
@@ -340,38 +348,4 @@ pub(super) fn layer_boxes(
             }
         })
         .collect()
-}
-
-/// Bounding box (x0, y0, x1, y1 exclusive) of a layer's input, widened by `m` and clipped.
-pub(super) fn layer_box(
-    w: usize,
-    h: usize,
-    idx: &[u16],
-    l: usize,
-    m: usize,
-    all: bool,
-) -> Option<(usize, usize, usize, usize)> {
-    if all {
-        return Some((0, 0, w, h));
-    }
-    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
-    for y in 0..h {
-        for x in 0..w {
-            if idx[y * w + x] as usize == l {
-                x0 = x0.min(x);
-                y0 = y0.min(y);
-                x1 = x1.max(x + 1);
-                y1 = y1.max(y + 1);
-            }
-        }
-    }
-    if x0 == usize::MAX {
-        return None;
-    }
-    Some((
-        x0.saturating_sub(m),
-        y0.saturating_sub(m),
-        (x1 + m).min(w),
-        (y1 + m).min(h),
-    ))
 }

@@ -205,31 +205,22 @@ impl LensMap {
     /// beyond the far plane (a layer's middle depth toward infinity) interpolates between
     /// the far-plane entry and the infinity entry.
     pub fn sigma_code(&self, key: u32) -> i64 {
-        match self.form {
-            SigmaForm::Affine => self.sigma_code_affine(key),
-            SigmaForm::Paper => self.sigma_code_rom(key),
-        }
+        self.sigma_coder().code(key)
     }
 
-    /// The affine form: `(z - z_e) G`, exact, rounded.
-    fn sigma_code_affine(&self, key: u32) -> i64 {
-        let zq = self.z_quantizer();
-        let code = |z: f64| zq.quantize_f64(z).code;
-        let z = if key == u32::MAX {
-            code(self.z_inf)
-        } else {
-            key as i64
-        };
-        let (zf, zn) = (code(self.z_far_edge), code(self.z_near_edge));
-        let d = if z > zf {
-            z - zf
-        } else if z < zn {
-            z - zn
-        } else {
-            return 0;
-        };
-        let g = self.g_code() as i128;
-        round_shift(d as i128 * g, self.z_frac + G_FRAC - SIGMA_FRAC, Quant::Rnd) as i64
+    /// [`LensMap::sigma_code`] for many codes: the constants quantised once.
+    pub fn sigma_coder(&self) -> SigmaCoder<'_> {
+        let affine = (self.form == SigmaForm::Affine).then(|| {
+            let zq = self.z_quantizer();
+            let code = |z: f64| zq.quantize_f64(z).code;
+            Affine {
+                z_inf: code(self.z_inf),
+                z_far: code(self.z_far_edge),
+                z_near: code(self.z_near_edge),
+                g: self.g_code(),
+            }
+        });
+        SigmaCoder { lens: self, affine }
     }
 
     /// The sigma ROM of the paper form: `2^rom_bits + 1` entries, the sigma code at screen
@@ -334,5 +325,43 @@ fn fitted(frac: u32, xs: &[f64]) -> Quantizer {
         q(int + 1)
     } else {
         first
+    }
+}
+
+/// The affine form's constants as the hardware holds them (depth codes of infinity and the
+/// in-focus band's edges, G).
+#[derive(Clone, Copy, Debug)]
+struct Affine {
+    z_inf: i64,
+    z_far: i64,
+    z_near: i64,
+    g: i64,
+}
+
+/// The sigma code of depth codes ([`LensMap::sigma_coder`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SigmaCoder<'a> {
+    lens: &'a LensMap,
+    affine: Option<Affine>,
+}
+
+impl SigmaCoder<'_> {
+    /// [`LensMap::sigma_code`] of `key`.
+    #[inline]
+    pub fn code(&self, key: u32) -> i64 {
+        let Some(a) = self.affine else {
+            return self.lens.sigma_code_rom(key);
+        };
+        // The affine form: `(z - z_e) G`, exact, rounded.
+        let z = if key == u32::MAX { a.z_inf } else { key as i64 };
+        let d = if z > a.z_far {
+            z - a.z_far
+        } else if z < a.z_near {
+            z - a.z_near
+        } else {
+            return 0;
+        };
+        let sh = self.lens.z_frac + G_FRAC - SIGMA_FRAC;
+        round_shift(d as i128 * a.g as i128, sh, Quant::Rnd) as i64
     }
 }

@@ -180,6 +180,7 @@ impl Stage for Dof {
         // Runs of one depth code are common: each code's sigma and CoC are computed once per
         // run.
         let mut last: Option<(u32, bool)> = None;
+        let coder = lens.sigma_coder();
         for &k in &frame.depth {
             if k == u32::MAX {
                 continue;
@@ -187,7 +188,7 @@ impl Stage for Dof {
             let focused = match last {
                 Some((lk, f)) if lk == k => f,
                 _ => {
-                    let s = lens.sigma_code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
+                    let s = coder.code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
                     sig_min = sig_min.min(s);
                     sig_max = sig_max.max(s);
                     let c = lens.coc_f64(k);
