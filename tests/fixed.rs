@@ -774,10 +774,15 @@ fn round_shift_i64_equals_round_shift() {
         for raw in [
             i64::MIN / 4,
             i64::MAX / 4,
+            // Sums that leave i64 take the i128 path.
+            i64::MIN,
+            i64::MIN + 1,
+            i64::MAX,
+            i64::MAX - 1,
             -(1 << 40) - 1,
             (1 << 40) + (1 << 19),
         ] {
-            for shift in [20u32, 40, 62] {
+            for shift in [1u32, 20, 40, 61, 62] {
                 assert_eq!(
                     round_shift_i64(raw, shift, q) as i128,
                     round_shift(raw as i128, shift, q)

@@ -15,7 +15,9 @@ mod instrument;
 mod quant;
 
 pub use instrument::SignalStats;
-pub use quant::{Quantized, Quantizer, quantize_slice_f64, round_shift, round_shift_i64};
+pub use quant::{
+    Quantized, Quantizer, RoundShift, quantize_slice_f64, round_shift, round_shift_i64,
+};
 
 use std::fmt;
 use std::str::FromStr;

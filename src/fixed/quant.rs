@@ -63,24 +63,65 @@ fn rounds_up(
 /// Exhaustively checked against [`round_shift`] in the tests.
 #[inline]
 pub fn round_shift_i64(raw: i64, shift: u32, q: Quant) -> i64 {
-    debug_assert!(shift < 63);
-    if shift == 0 {
-        return raw;
-    }
-    let floor = raw >> shift;
-    let rem = raw & ((1i64 << shift) - 1);
-    if rem == 0 {
-        return floor;
-    }
-    let half = 1i64 << (shift - 1);
-    floor
-        + i64::from(rounds_up(
+    RoundShift::new(shift, q).apply(raw)
+}
+
+/// [`round_shift_i64`] with its mode turned into constants once: `raw * 2^-shift` is
+/// rounded as `(raw + bias) >> shift` (an arithmetic shift is the floor), the bias set by
+/// the sign of `raw` and, for convergent rounding, by the parity of the floor. No branch
+/// on the mode per value; a sum that would leave `i64` takes [`round_shift`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RoundShift {
+    shift: u32,
+    q: Quant,
+    /// Bias for `raw >= 0` and for `raw < 0`.
+    pos: i64,
+    neg: i64,
+    /// 1 for ties to even (the floor's lowest bit joins the bias), else 0.
+    conv: i64,
+}
+
+impl RoundShift {
+    /// The rounding of `raw * 2^-shift` in mode `q` (`shift` in 0..=62).
+    pub const fn new(shift: u32, q: Quant) -> Self {
+        assert!(shift < 63);
+        let (pos, neg, conv) = if shift == 0 {
+            (0, 0, 0)
+        } else {
+            let half = 1i64 << (shift - 1);
+            match q {
+                Quant::Trn => (0, 0, 0),
+                Quant::TrnZero => (0, 2 * half - 1, 0),
+                Quant::Rnd => (half, half, 0),
+                Quant::RndZero => (half - 1, half, 0),
+                Quant::RndInf => (half, half - 1, 0),
+                Quant::RndMinInf => (half - 1, half - 1, 0),
+                Quant::RndConv => (half - 1, half - 1, 1),
+            }
+        };
+        Self {
+            shift,
             q,
-            raw < 0,
-            floor < 0,
-            floor & 1 != 0,
-            rem.cmp(&half),
-        ))
+            pos,
+            neg,
+            conv,
+        }
+    }
+
+    /// The bits dropped.
+    pub const fn shift(&self) -> u32 {
+        self.shift
+    }
+
+    /// `raw * 2^-shift` rounded.
+    #[inline(always)]
+    pub fn apply(&self, raw: i64) -> i64 {
+        let bias = if raw < 0 { self.neg } else { self.pos } + ((raw >> self.shift) & self.conv);
+        match raw.checked_add(bias) {
+            Some(v) => v >> self.shift,
+            None => round_shift(i128::from(raw), self.shift, self.q) as i64,
+        }
+    }
 }
 
 /// A quantised code and whether the overflow mode had to act.

@@ -15,7 +15,7 @@ use super::{
 };
 use crate::config::HwConfig;
 use crate::error::Result;
-use crate::fixed::{Quant, SignalStats, round_shift_i64};
+use crate::fixed::{RoundShift, SignalStats};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -149,10 +149,8 @@ pub fn float_samples(
 /// Depth conversion from the interpolated format to the z-buffer format.
 #[derive(Clone, Copy, Debug)]
 pub struct ZConvert {
-    /// Fraction bits dropped.
-    pub shift: u32,
-    /// Rounding.
-    pub quant: Quant,
+    /// Fraction bits dropped and their rounding.
+    pub round: RoundShift,
     /// Largest z-buffer code.
     pub max: u32,
 }
@@ -161,7 +159,7 @@ impl ZConvert {
     /// Converts one depth code; counts a clamp at the top of the range.
     #[inline]
     pub fn apply(&self, z: u32, clamped: &mut u64) -> u32 {
-        let v = round_shift_i64(z as i64, self.shift, self.quant);
+        let v = self.round.apply(z as i64);
         if v > self.max as i64 {
             *clamped += 1;
             self.max
@@ -263,9 +261,10 @@ impl Part<'_> {
 /// clamps (the tests are the fragments, counted by the caller).
 pub fn resolve(frags: &[Frag], prim: u32, zc: &ZConvert, part: &mut Part, w: &mut VisWork) {
     let s0 = part.s0;
+    let (mut writes, mut clamped) = (0, 0);
     for f in frags {
         let s = f.s as usize - s0;
-        let z = zc.apply(f.z, &mut w.clamped);
+        let z = zc.apply(f.z, &mut clamped);
         if z < part.z[s] {
             part.z[s] = z;
             part.prim[s] = prim;
@@ -273,9 +272,11 @@ pub fn resolve(frags: &[Frag], prim: u32, zc: &ZConvert, part: &mut Part, w: &mu
             for (c, plane) in part.extra.iter_mut().enumerate() {
                 plane[s] = f.i[c + 1];
             }
-            w.writes += 1;
+            writes += 1;
         }
     }
+    w.writes += writes;
+    w.clamped += clamped;
 }
 
 /// Visible samples of a light point (tested, not written).
@@ -319,8 +320,10 @@ pub fn point_visible_f64(frags: &[FragF], buf: &SamplesF) -> Vec<(u32, f64)> {
 /// The z-buffer conversion of the hardware configuration.
 pub fn z_convert(hw: &HwConfig) -> ZConvert {
     ZConvert {
-        shift: hw.input.z.format.frac_bits - hw.visibility.z.format.frac_bits,
-        quant: hw.visibility.z.quant,
+        round: RoundShift::new(
+            hw.input.z.format.frac_bits - hw.visibility.z.format.frac_bits,
+            hw.visibility.z.quant,
+        ),
         max: hw.visibility.z.format.max_code() as u32,
     }
 }

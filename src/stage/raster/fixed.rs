@@ -7,7 +7,7 @@
 //! `walked` samples; rows above the region likewise (`rows_walked`).
 
 use super::Frag;
-use crate::fixed::{Quant, round_shift_i64};
+use crate::fixed::{Quant, RoundShift};
 use crate::stage::setup::{Edge, PointSetup, Setup, TriSetup};
 use crate::stage::{Grid, SampleRegion};
 
@@ -59,8 +59,8 @@ pub struct RasterParams {
 }
 
 #[inline]
-fn out_code(v: i64, p: &RasterParams, max: i64, clamped: &mut u64) -> u32 {
-    let c = round_shift_i64(v, p.guard, p.quant);
+fn out_code(v: i64, rs: &RoundShift, max: i64, clamped: &mut u64) -> u32 {
+    let c = rs.apply(v);
     if c < 0 || c > max {
         *clamped += 1;
         c.clamp(0, max) as u32
@@ -132,6 +132,7 @@ pub fn raster_tri_rows(
     let (mut vi, mut vz) = (t.i.map(|a| a.seed), t.z.seed);
     let mut interp = EdgeInterp::new(t.first_left(), &di, dz);
     let width = reg.width();
+    let rs = RoundShift::new(p.guard, p.quant);
     let mut k = k_start;
     loop {
         let short = if in_upper { &upper } else { &lower };
@@ -145,28 +146,28 @@ pub fn raster_tri_rows(
             let c_end = rq.min(reg.c1);
             if c_start < c_end {
                 w.spans += 1;
-                let (mut si, mut sz) = (vi, vz);
-                for _ in lq..c_start {
-                    for ch in 0..nc {
-                        si[ch] += di[ch].0;
-                    }
-                    sz += dz.0;
+                // The columns left of the region are walked (counted) as the hardware
+                // steps them: `n` adds of the column gradient are one multiply here.
+                let n = c_start - lq;
+                let (mut si, mut sz) = (vi, vz + dz.0 * n);
+                for ch in 0..nc {
+                    si[ch] += di[ch].0 * n;
                 }
-                w.walked += (c_start - lq) as u64;
+                w.walked += n as u64;
                 let row = (k - reg.k0) as usize * width;
-                for c in c_start..c_end {
+                let s0 = (row + (c_start - reg.c0) as usize) as u32;
+                let mut clamped = 0;
+                out.extend((0..(c_end - c_start) as u32).map(|j| {
                     let mut i = [0u32; 3];
                     for ch in 0..nc {
-                        i[ch] = out_code(si[ch], p, p.i_max[ch], &mut w.clamped);
+                        i[ch] = out_code(si[ch], &rs, p.i_max[ch], &mut clamped);
                         si[ch] += di[ch].0;
                     }
-                    out.push(Frag {
-                        s: (row + (c - reg.c0) as usize) as u32,
-                        z: out_code(sz, p, p.z_max, &mut w.clamped),
-                        i,
-                    });
+                    let z = out_code(sz, &rs, p.z_max, &mut clamped);
                     sz += dz.0;
-                }
+                    Frag { s: s0 + j, z, i }
+                }));
+                w.clamped += clamped;
                 w.samples += (c_end - c_start) as u64;
             }
         } else if above {
