@@ -598,6 +598,43 @@ fn old_mid_sigma(l: &LensMap, far: u32, near: u32) -> f64 {
     old_sigma_code(l, c) as f64 / (1u64 << SIGMA_FRAC) as f64
 }
 
+/// The layer plan takes the middle of two depth codes as `(far + near + 1) / 2` (exact in
+/// binary, rounded as the constants are: RND_INF); the lens's z quantiser must agree on the
+/// embedded lenses, for codes across the whole z buffer and at its ends.
+#[test]
+fn the_middle_of_two_depth_codes_is_their_mean_rounded_away_from_zero() {
+    let hw = HwConfig::default_config();
+    let zf = hw.visibility.z.format.frac_bits;
+    let top = hw.visibility.z.format.max_code() as u32;
+    let mut rng = Rng::new(0x3a1d);
+    for name in ["default", "cone-focus"] {
+        let scene = Scene::embedded(name).unwrap();
+        for form in [SigmaForm::Affine, SigmaForm::Paper] {
+            let lm = LensMap::from_camera(&scene.camera, scene.image.height, zf, form, 10)
+                .expect("a thin lens");
+            let zq = lm.z_quantizer();
+            assert_eq!((zq.format.frac_bits, zq.quant), (zf, Quant::RndInf));
+            let mut pairs: Vec<(u32, u32)> = vec![(0, 0), (1, 0), (top, 0), (top, top - 1)];
+            pairs.extend((0..20_000).map(|_| {
+                let (a, b) = (
+                    rng.bits(32) as u32 % (top + 1),
+                    rng.bits(32) as u32 % (top + 1),
+                );
+                (a.max(b), a.min(b))
+            }));
+            for (far, near) in pairs {
+                let q = zq.quantize_f64((lm.z_of(far) + lm.z_of(near)) / 2.0);
+                assert!(!q.overflow, "{name}: {far} {near}");
+                assert_eq!(
+                    q.code,
+                    (i64::from(far) + i64::from(near) + 1) / 2,
+                    "{name}: {far} {near}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn quantised_lens_constants_agree_with_f64_round_on_the_embedded_scenes() {
     let hw = HwConfig::default_config();

@@ -6,8 +6,13 @@ use super::lens::{LensMap, SIGMA_FRAC};
 use super::mask::taps_fixed;
 use crate::config::{AlphaNorm, DofKernel};
 use crate::config::{DofCfg, MAX_HALF_SIZE_LIMIT};
+use crate::fixed::Quant;
 use crate::stage::Pool;
+use rayon::prelude::*;
 use serde::Serialize;
+
+/// Pixels per chunk of the layer index's parallel pass.
+const INDEX_CHUNK: usize = 1 << 14;
 
 /// One depth layer.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -132,17 +137,20 @@ pub fn plan_layers_in(
 ) -> Result<LayerPlan, String> {
     // The background code (most pixels of a typical frame) is added once, not sorted; nor
     // is a pixel repeating its left neighbour's code.
-    let mut last = u32::MAX;
     let mut keys: Vec<u32> = pool.take(key.len() + 1);
-    keys.extend(key.iter().copied().filter(|&k| {
-        let new = k != u32::MAX && k != last;
-        last = k;
-        new
-    }));
+    let before = std::iter::once(&u32::MAX).chain(key);
+    keys.extend(
+        key.iter()
+            .zip(before)
+            .filter(|&(&k, &b)| k != u32::MAX && k != b)
+            .map(|(&k, _)| k),
+    );
     if key.contains(&u32::MAX) || cov.iter().any(|&c| (c as u32) < n2) {
         keys.push(u32::MAX);
     }
-    keys.sort_unstable_by(|a, b| b.cmp(a));
+    let mut tmp: Vec<u32> = pool.scratch(keys.len(), 0);
+    sort_descending(&mut keys, &mut tmp);
+    pool.give(tmp);
     keys.dedup();
     let coder = lens.sigma_coder();
     let sig = |k: u32| coder.code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
@@ -151,7 +159,7 @@ pub fn plan_layers_in(
     // mask is built (a huge lens would otherwise allocate huge masks), and name it, so that
     // raising the limit to it is enough.
     let mut sigs: Vec<f64> = pool.take(keys.len());
-    sigs.extend(keys.iter().map(|&k| sig(k)));
+    keys.par_iter().map(|&k| sig(k)).collect_into_vec(&mut sigs);
     if let Some((&worst, &s)) = keys
         .iter()
         .zip(&sigs)
@@ -175,8 +183,17 @@ pub fn plan_layers_in(
         }
     }
     let zq = lens.z_quantizer();
+    // Two depth codes' middle is exact in binary: with the constants' rounding (RND_INF,
+    // ties away from zero) and no saturation it is `(far + near + 1) / 2`, as the
+    // quantiser gives it (tests/dof.rs checks the two agree).
+    let exact_mid = zq.format.frac_bits == lens.z_frac && zq.quant == Quant::RndInf;
+    let zq_max = zq.format.max_code();
     let mid_sigma = |far: u32, near: u32| {
         let zm = (lens.z_of(far) + lens.z_of(near)) / 2.0;
+        let sum = i64::from(far) + i64::from(near) + 1;
+        if exact_mid && far != u32::MAX && sum / 2 <= zq_max {
+            return (zm, sig((sum / 2) as u32));
+        }
         // The middle depth as a code (the background's z_inf is exact): sigma from its code
         // (`lens.z_code`, its quantiser built once).
         let code = zq.quantize_f64(zm).code;
@@ -245,17 +262,33 @@ pub fn plan_layers_in(
         // layers are ordered by descending key ranges
         layers.partition_point(|l| l.key_near > k)
     };
-    // Runs of one depth code are common: the layer is searched once per run.
-    let mut last = (u32::MAX, find(u32::MAX) as u16);
-    let mut index: Vec<u16> = pool.take(key.len());
-    index.extend(key.iter().map(|&k| {
-        if k != last.0 {
-            last = (k, find(k) as u16);
-        }
-        last.1
-    }));
-    for &l in &index {
-        layers[l as usize].pixels += 1;
+    // Runs of one depth code are common: the layer is searched once per run. Chunks of
+    // pixels on the threads, their counts summed (integers: the same on any thread count).
+    let mut index: Vec<u16> = pool.scratch(key.len(), 0);
+    let counts = index
+        .par_chunks_mut(INDEX_CHUNK)
+        .zip(key.par_chunks(INDEX_CHUNK))
+        .map(|(out, key)| {
+            let mut counts = vec![0u64; layers.len()];
+            let mut last = (u32::MAX, find(u32::MAX) as u16);
+            for (o, &k) in out.iter_mut().zip(key) {
+                if k != last.0 {
+                    last = (k, find(k) as u16);
+                }
+                *o = last.1;
+                counts[last.1 as usize] += 1;
+            }
+            counts
+        })
+        .reduce(
+            || vec![0u64; layers.len()],
+            |mut a, b| {
+                a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+                a
+            },
+        );
+    for (layer, n) in layers.iter_mut().zip(counts) {
+        layer.pixels = n;
     }
     let background = if keys.first() == Some(&u32::MAX) {
         Some(0)
@@ -271,6 +304,33 @@ pub fn plan_layers_in(
         skipped: Vec::new(),
         alpha_norm: p.alpha_norm,
     })
+}
+
+/// Sorts `keys` largest first: a least-significant-digit radix sort in three passes of 11
+/// bits (`tmp`: scratch of the same length), linear in the keys.
+fn sort_descending(keys: &mut [u32], tmp: &mut [u32]) {
+    const BITS: u32 = 11;
+    const MASK: u32 = (1 << BITS) - 1;
+    let (mut src, mut dst) = (keys, tmp);
+    for pass in 0..3 {
+        let digit = |k: u32| (((!k) >> (pass * BITS)) & MASK) as usize;
+        let mut start = [0usize; 1 << BITS];
+        for &k in src.iter() {
+            start[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for s in start.iter_mut() {
+            (*s, sum) = (sum, sum + *s);
+        }
+        for &k in src.iter() {
+            let d = digit(k);
+            dst[start[d]] = k;
+            start[d] += 1;
+        }
+        std::mem::swap(&mut src, &mut dst);
+    }
+    // Three passes leave the sorted keys in `tmp`.
+    dst.copy_from_slice(src);
 }
 
 /// One layer as the cycle model sees it: the pixels of its box (both passes produce one
@@ -348,4 +408,30 @@ pub(super) fn layer_boxes(
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sort_descending;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The radix sort orders any keys as the comparison sort does, largest first.
+        #[test]
+        fn radix_sort_is_a_descending_sort(mut keys in prop::collection::vec(any::<u32>(), 0..3000)) {
+            let mut tmp = vec![0; keys.len()];
+            let mut want = keys.clone();
+            want.sort_unstable_by(|a, b| b.cmp(a));
+            sort_descending(&mut keys, &mut tmp);
+            prop_assert_eq!(keys, want);
+        }
+    }
+
+    #[test]
+    fn radix_sort_keeps_the_extremes() {
+        let mut keys = vec![0, u32::MAX, 1 << 22, u32::MAX - 1, 0, 1 << 11];
+        let mut tmp = vec![0; keys.len()];
+        sort_descending(&mut keys, &mut tmp);
+        assert_eq!(keys, [u32::MAX, u32::MAX - 1, 1 << 22, 1 << 11, 0, 0]);
+    }
 }

@@ -5,7 +5,7 @@
 //! (the depth shifted in inverse depth, `sigma = G (z - z_e)`, one multiply).
 
 use crate::config::SigmaForm;
-use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift};
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer, RoundShift, round_shift};
 use crate::scene::{Camera, Lens, screen_z};
 use serde::Serialize;
 use std::sync::Arc;
@@ -210,17 +210,19 @@ impl LensMap {
 
     /// [`LensMap::sigma_code`] for many codes: the constants quantised once.
     pub fn sigma_coder(&self) -> SigmaCoder<'_> {
-        let affine = (self.form == SigmaForm::Affine).then(|| {
-            let zq = self.z_quantizer();
-            let code = |z: f64| zq.quantize_f64(z).code;
-            Affine {
-                z_inf: code(self.z_inf),
-                z_far: code(self.z_far_edge),
-                z_near: code(self.z_near_edge),
-                g: self.g_code(),
-            }
+        let zq = self.z_quantizer();
+        let code = |z: f64| zq.quantize_f64(z).code;
+        let z_inf = code(self.z_inf);
+        let affine = (self.form == SigmaForm::Affine).then(|| Affine {
+            z_far: code(self.z_far_edge),
+            z_near: code(self.z_near_edge),
+            g: self.g_code(),
         });
-        SigmaCoder { lens: self, affine }
+        SigmaCoder {
+            lens: self,
+            z_inf,
+            affine,
+        }
     }
 
     /// The sigma ROM of the paper form: `2^rom_bits + 1` entries, the sigma code at screen
@@ -257,7 +259,7 @@ impl LensMap {
     }
 
     /// The paper form's sigma code: ROM entry at the top bits, linear interpolation.
-    fn sigma_code_rom(&self, key: u32) -> i64 {
+    fn sigma_code_rom(&self, key: u32, z_inf_code: i64) -> i64 {
         let rom = &self.rom;
         let n = 1i64 << self.rom_bits;
         let inf = rom[rom.len() - 1];
@@ -268,7 +270,7 @@ impl LensMap {
         let one = 1i64 << self.z_frac;
         if key >= one {
             // Beyond the far plane: between the far-plane entry and infinity.
-            let span = self.z_code(self.z_inf) - one;
+            let span = z_inf_code - one;
             let far = rom[n as usize];
             if span <= 0 {
                 return inf;
@@ -283,7 +285,7 @@ impl LensMap {
         let j = (key >> shift) as usize;
         let f = key & ((1i64 << shift) - 1);
         let (a, b) = (rom[j], rom[j + 1]);
-        a + round_shift(i128::from(b - a) * i128::from(f), shift, Quant::Rnd) as i64
+        a + round_product(b - a, f, shift)
     }
 
     /// Width of the G constant in bits (integer + `G_FRAC`): its quantiser's format.
@@ -293,6 +295,15 @@ impl LensMap {
 }
 
 /// `n / d` rounded to nearest, ties away from zero (`d > 0`).
+/// `a b 2^-shift` rounded to nearest (RND), in 64 bits when the product fits.
+#[inline]
+fn round_product(a: i64, b: i64, shift: u32) -> i64 {
+    match a.checked_mul(b) {
+        Some(p) if shift < 63 => RoundShift::new(shift, Quant::Rnd).apply(p),
+        _ => round_shift(i128::from(a) * i128::from(b), shift, Quant::Rnd) as i64,
+    }
+}
+
 fn round_div(n: i128, d: i128) -> i64 {
     let q = (2 * n.abs() + d) / (2 * d);
     (if n < 0 { -q } else { q }) as i64
@@ -328,11 +339,10 @@ fn fitted(frac: u32, xs: &[f64]) -> Quantizer {
     }
 }
 
-/// The affine form's constants as the hardware holds them (depth codes of infinity and the
-/// in-focus band's edges, G).
+/// The affine form's constants as the hardware holds them (depth codes of the in-focus
+/// band's edges, G).
 #[derive(Clone, Copy, Debug)]
 struct Affine {
-    z_inf: i64,
     z_far: i64,
     z_near: i64,
     g: i64,
@@ -342,6 +352,8 @@ struct Affine {
 #[derive(Clone, Copy, Debug)]
 pub struct SigmaCoder<'a> {
     lens: &'a LensMap,
+    /// The depth code of infinity.
+    z_inf: i64,
     affine: Option<Affine>,
 }
 
@@ -350,10 +362,14 @@ impl SigmaCoder<'_> {
     #[inline]
     pub fn code(&self, key: u32) -> i64 {
         let Some(a) = self.affine else {
-            return self.lens.sigma_code_rom(key);
+            return self.lens.sigma_code_rom(key, self.z_inf);
         };
         // The affine form: `(z - z_e) G`, exact, rounded.
-        let z = if key == u32::MAX { a.z_inf } else { key as i64 };
+        let z = if key == u32::MAX {
+            self.z_inf
+        } else {
+            key as i64
+        };
         let d = if z > a.z_far {
             z - a.z_far
         } else if z < a.z_near {
@@ -362,6 +378,6 @@ impl SigmaCoder<'_> {
             return 0;
         };
         let sh = self.lens.z_frac + G_FRAC - SIGMA_FRAC;
-        round_shift(d as i128 * a.g as i128, sh, Quant::Rnd) as i64
+        round_product(d, a.g, sh)
     }
 }
