@@ -278,9 +278,12 @@ pub(super) fn totals(
     };
     let other = workload(plan, steps, &hw.cycles, other_schedule);
     let workload = chosen;
-    let sim = cached_sim(&workload, cache);
+    // The two schedules' simulations are independent: one on each thread.
+    let (sim, other_sim) = rayon::join(
+        || cached_sim(&workload, cache),
+        || cached_sim(&other, cache),
+    );
     let (sim, wall) = (&sim.0, sim.1);
-    let other_sim = cached_sim(&other, cache);
     // Every channel's lane streams its own depth of field, its line buffers as wide as
     // its own frame word.
     let geometry = steps
