@@ -63,7 +63,9 @@ impl Pool {
     /// An empty buffer with room for `cap` elements: the smallest kept one that holds
     /// them, else the largest kept one grown, else a new one.
     pub fn take<T: Send + 'static>(&self, cap: usize) -> Vec<T> {
-        let mut v = self.pick(cap);
+        let Some(mut v) = self.pick(cap) else {
+            return Vec::with_capacity(cap);
+        };
         v.clear();
         v.reserve(cap);
         v
@@ -73,7 +75,11 @@ impl Pool {
     /// buffer's old elements stay as they are (no fill pass over a frame-sized plane from
     /// the second frame on), only elements beyond its length are set to `value`.
     pub fn scratch<T: Copy + Send + 'static>(&self, n: usize, value: T) -> Vec<T> {
-        let mut v = self.pick(n);
+        // A new buffer of zeros comes from the allocator already zeroed (no fill pass: its
+        // pages are touched first by the kernel that writes them).
+        let Some(mut v) = self.pick(n) else {
+            return vec![value; n];
+        };
         if v.len() >= n {
             v.truncate(n);
         } else {
@@ -82,24 +88,22 @@ impl Pool {
         v
     }
 
-    /// The kept buffer [`Pool::take`] would choose for `cap` elements, as it was kept.
-    fn pick<T: Send + 'static>(&self, cap: usize) -> Vec<T> {
+    /// The kept buffer [`Pool::take`] would choose for `cap` elements, as it was kept
+    /// (`None`: none is kept).
+    fn pick<T: Send + 'static>(&self, cap: usize) -> Option<Vec<T>> {
         let mut shelves = self.lock();
-        let Some(shelf) = shelves.get_mut(&TypeId::of::<T>()) else {
-            return Vec::with_capacity(cap);
-        };
+        let shelf = shelves.get_mut(&TypeId::of::<T>())?;
         let cap_of = |b: &Box<dyn Any + Send>| b.downcast_ref::<Vec<T>>().map_or(0, Vec::capacity);
         let fits = (0..shelf.len())
             .filter(|&j| cap_of(&shelf[j]) >= cap)
             .min_by_key(|&j| cap_of(&shelf[j]));
-        let pick = fits.or_else(|| (0..shelf.len()).max_by_key(|&j| cap_of(&shelf[j])));
-        let Some(j) = pick else {
-            return Vec::with_capacity(cap);
-        };
-        *shelf
-            .swap_remove(j)
-            .downcast::<Vec<T>>()
-            .expect("a shelf holds its own type")
+        let j = fits.or_else(|| (0..shelf.len()).max_by_key(|&j| cap_of(&shelf[j])))?;
+        Some(
+            *shelf
+                .swap_remove(j)
+                .downcast::<Vec<T>>()
+                .expect("a shelf holds its own type"),
+        )
     }
 
     /// The buffer of `T`s kept last, with its elements (objects kept whole between frames,

@@ -59,8 +59,8 @@ impl Samples {
         let n = reg.len();
         Self {
             reg,
-            z: pool.scratch(n, u32::MAX),
-            prim: pool.scratch(n, BACKGROUND),
+            z: pool.scratch(n, 0),
+            prim: pool.scratch(n, 0),
             i: pool.scratch(n, 0),
         }
     }
