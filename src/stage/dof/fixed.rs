@@ -8,7 +8,7 @@ use super::scratch::Scratch;
 use super::strip::{LayerCx, run_strip, strip_rows};
 use super::uniform;
 use crate::config::{AlphaNorm, DofCfg};
-use crate::fixed::{Overflow, QFormat, Quant, Quantizer, round_shift, round_shift_i64};
+use crate::fixed::{Overflow, QFormat, Quant, Quantizer, RoundShift, round_shift, round_shift_i64};
 use crate::stage::Pool;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -290,14 +290,12 @@ fn exec_with<P: Plane>(
     mut observe: impl FnMut(&LayerPlanes),
 ) -> Result<FixedRun, (String, u32)> {
     let (w, h) = (img.width, img.height);
-    let (q, g) = (p.alpha_bits, p.guard_bits);
     let mut work = DofWork::default();
     let mut skipped = vec![0u64; plan.layers.len()];
     // A composite never exceeds the largest code times 2^g (every colour is a weighted mean
     // of codes, docs/dof.md): u64 words.
     let mut out = buffers.filled(w * h, 0u64);
     let mut def = buffers.filled(w * h, false);
-    let one_q = 1u128 << q;
     let boxes = layer_boxes(w, h, plan);
     // One scratch per thread, kept across strips and layers.
     let threads = rayon::current_num_threads().max(1);
@@ -318,27 +316,9 @@ fn exec_with<P: Plane>(
         let wy = border_sums(c, h);
         if layer.m == 0 {
             // sigma = 0: the mask is the identity; pass through.
-            let s = &mut *pool[0].lock().expect("scratch");
-            s.input(img, plan, l, (x0, y0, bw, bh));
-            for y in 0..bh {
-                for x in 0..bw {
-                    let i = y * bw + x;
-                    let (a, v, d) = (
-                        s.ai[i].get() as u128,
-                        s.xi[i].get() as u128,
-                        s.di[i].get() as u128,
-                    );
-                    if a == 0 {
-                        continue;
-                    }
-                    let pi = (y + y0) * w + x + x0;
-                    work.passthrough += 1;
-                    let col = round_shift(((v << g) / a) as i128, 0, p.quant) as u128;
-                    let aq = (a << q) / d;
-                    composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
-                    work.composites += 1;
-                }
-            }
+            let n = passthrough(img, plan, l, (x0, y0, bw, bh), p, &mut out, &mut def);
+            work.passthrough += n;
+            work.composites += n;
             continue;
         }
         let strip = match exec {
@@ -412,19 +392,87 @@ fn exec_with<P: Plane>(
         // Both passes, every plane.
         work.macs += 2 * planes(plan) * c.len() as u64 * active;
     }
-    // The composite carries `g` guard bits below the frame LSB.
-    let frame_q = Quantizer::new(frame_fmt, p.quant, Overflow::Sat);
-    let raw_frac = (g + frame_fmt.frac_bits) as i32;
-    let mut res = buffers.take(out.len());
-    res.extend(out.iter().map(|&v| {
-        let r = frame_q.quantize_raw(i128::from(v), raw_frac);
-        work.out_overflows += u64::from(r.overflow);
-        r.code as u32
-    }));
+    let mut res = buffers.scratch(out.len(), 0u32);
+    work.out_overflows = to_frame(&out, &mut res, frame_fmt, p.guard_bits, p.quant);
     buffers.give(out);
     buffers.give(def);
     buffers.give(pool);
     Ok((res, work, skipped))
+}
+
+/// Layer `l` with sigma 0 (the identity mask) over its box `(x0, y0, bw, bh)`: each
+/// pixel's colour and alpha composited straight into `out`, row by row on the threads.
+/// Returns the pixels passed through.
+fn passthrough(
+    img: &DepthImage<u32>,
+    plan: &LayerPlan,
+    l: usize,
+    (x0, y0, bw, bh): (usize, usize, usize, usize),
+    p: &DofCfg,
+    out: &mut [u64],
+    def: &mut [bool],
+) -> u64 {
+    let w = img.width;
+    let (q, g) = (p.alpha_bits, p.guard_bits);
+    let one_q = 1u128 << q;
+    let rows = out[y0 * w..(y0 + bh) * w].par_chunks_mut(w);
+    rows.zip(def[y0 * w..(y0 + bh) * w].par_chunks_mut(w))
+        .enumerate()
+        .map(|(y, (o, d))| {
+            let r = (y0 + y) * w + x0..(y0 + y) * w + x0 + bw;
+            let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
+            let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
+            let mut n = 0;
+            for x in 0..bw {
+                let (a, b) = share(plan, key[x], cov[x], idx[x], l, img.n2);
+                if a == 0 {
+                    continue;
+                }
+                let (a, b) = (u128::from(a), u128::from(b));
+                let v = u128::from(value[x]) * a;
+                n += 1;
+                let col = round_shift(((v << g) / a) as i128, 0, p.quant) as u128;
+                let aq = (a << q) / b;
+                composite(&mut o[x0 + x], &mut d[x0 + x], col, aq, one_q, q, p.quant);
+            }
+            n
+        })
+        .sum()
+}
+
+/// The composite `out` (with `g` guard bits below the frame LSB) as codes of `frame_fmt`
+/// into `res`: rounded with `quant`, saturated; returns the saturations. In chunks on the
+/// threads (a count: the same on any thread count).
+fn to_frame(out: &[u64], res: &mut [u32], frame_fmt: QFormat, g: u32, quant: Quant) -> u64 {
+    const CHUNK: usize = 1 << 14;
+    let frame_q = Quantizer::new(frame_fmt, quant, Overflow::Sat);
+    let raw_frac = (g + frame_fmt.frac_bits) as i32;
+    // `guard_bits` is at most 24 (config): the i64 rounding applies to every word that
+    // fits an i64.
+    let round = RoundShift::new(g.min(62), quant);
+    // A composite is never negative, and every format's smallest code is at most 0: codes
+    // in `0..=hi` are in range.
+    let hi = frame_fmt.max_code().clamp(0, i64::from(u32::MAX));
+    out.par_chunks(CHUNK)
+        .zip(res.par_chunks_mut(CHUNK))
+        .map(|(o, r)| {
+            let mut overflows = 0;
+            for (&v, c) in o.iter().zip(r) {
+                let rounded = match i64::try_from(v) {
+                    Ok(v) if g < 63 => round.apply(v),
+                    _ => i64::MAX,
+                };
+                *c = if (0..=hi).contains(&rounded) {
+                    rounded as u32
+                } else {
+                    let q = frame_q.quantize_raw(i128::from(v), raw_frac);
+                    overflows += u64::from(q.overflow);
+                    q.code as u32
+                };
+            }
+            overflows
+        })
+        .sum()
 }
 
 /// `o = col` over `o` with alpha `aq / one`: `round((col aq + o (one - aq)) / one)`; the
@@ -461,5 +509,41 @@ pub(super) fn udiv(a: u128, b: u128) -> u128 {
         u128::from(a as u64 / b as u64)
     } else {
         a / b
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The fast frame quantisation gives the codes and saturation count of the
+        /// general quantiser, word by word, for any format, guard bits and rounding.
+        #[test]
+        fn to_frame_matches_the_quantiser(
+            words in proptest::collection::vec(any::<u64>(), 1..64),
+            small in 0u32..40,
+            signed in any::<bool>(),
+            int_bits in 1u32..=20,
+            frac_bits in 0u32..=12,
+            g in 0u32..=24,
+            q in 0usize..Quant::ALL.len(),
+        ) {
+            let fmt = QFormat::new(signed, int_bits, frac_bits);
+            let quant = Quant::ALL[q];
+            // Both huge words and words near the format's range.
+            let words: Vec<u64> = words.iter().map(|&v| v >> small).collect();
+            let mut res = vec![0u32; words.len()];
+            let n = to_frame(&words, &mut res, fmt, g, quant);
+            let fq = Quantizer::new(fmt, quant, Overflow::Sat);
+            let mut want = 0;
+            for (&v, &c) in words.iter().zip(&res) {
+                let r = fq.quantize_raw(i128::from(v), (g + frac_bits) as i32);
+                want += u64::from(r.overflow);
+                prop_assert_eq!(c, r.code as u32, "word {} fmt {} g {}", v, fmt, g);
+            }
+            prop_assert_eq!(n, want);
+        }
     }
 }

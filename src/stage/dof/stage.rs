@@ -24,6 +24,7 @@ use crate::stage::taps::{ChannelFrames, FrameCoding, FrameTap, Taps};
 use crate::stage::{
     Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Pool, Stage, StageId, Tokens, memo,
 };
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// The plan of the configured method.
@@ -174,32 +175,7 @@ impl Stage for Dof {
             facts.work.push(("potentiations", frame.acc.len() as u64));
             facts.signals.push(pot.stats.clone());
         }
-        // Blur facts.
-        let (mut sig_min, mut sig_max) = (f64::INFINITY, f64::NEG_INFINITY);
-        let (mut in_focus, mut coc_max) = (0u64, 0.0f64);
-        // Runs of one depth code are common: each code's sigma and CoC are computed once per
-        // run.
-        let mut last: Option<(u32, bool)> = None;
-        let coder = lens.sigma_coder();
-        for &k in &frame.depth {
-            if k == u32::MAX {
-                continue;
-            }
-            let focused = match last {
-                Some((lk, f)) if lk == k => f,
-                _ => {
-                    let s = coder.code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
-                    sig_min = sig_min.min(s);
-                    sig_max = sig_max.max(s);
-                    let c = lens.coc_f64(k);
-                    coc_max = coc_max.max(c);
-                    let f = c <= lens.coc_px;
-                    last = Some((k, f));
-                    f
-                }
-            };
-            in_focus += u64::from(focused);
-        }
+        let (sig_min, sig_max, coc_max, in_focus) = blur_facts(&frame.depth, &lens);
         facts.note("lens", &lens);
         facts.note(
             "object_sigma_px",
@@ -390,4 +366,46 @@ fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
     notes["composited_fixed"] = v(&region_error(&outf, &pp, &edge));
     notes["edge_band_px"] = r.into();
     notes
+}
+
+/// The blur over the frame's object pixels (depth code not `u32::MAX`): the smallest and
+/// largest sigma (px), the largest circle of confusion (px) and the pixels in focus (CoC
+/// within `lens.coc_px`). In chunks on the threads: minima, maxima and counts are the same
+/// in any order.
+fn blur_facts(depth: &[u32], lens: &LensMap) -> (f64, f64, f64, u64) {
+    const CHUNK: usize = 1 << 14;
+    let coder = lens.sigma_coder();
+    let one = (1u64 << SIGMA_FRAC) as f64;
+    let none = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, 0u64);
+    depth
+        .par_chunks(CHUNK)
+        .map(|chunk| {
+            let (mut sig_min, mut sig_max, mut coc_max, mut in_focus) = none;
+            // Runs of one depth code are common: each run's sigma and CoC are computed once.
+            let mut last: Option<(u32, bool)> = None;
+            for &k in chunk {
+                if k == u32::MAX {
+                    continue;
+                }
+                let focused = match last {
+                    Some((lk, f)) if lk == k => f,
+                    _ => {
+                        let s = coder.code(k) as f64 / one;
+                        sig_min = sig_min.min(s);
+                        sig_max = sig_max.max(s);
+                        let c = lens.coc_f64(k);
+                        coc_max = coc_max.max(c);
+                        let f = c <= lens.coc_px;
+                        last = Some((k, f));
+                        f
+                    }
+                };
+                in_focus += u64::from(focused);
+            }
+            (sig_min, sig_max, coc_max, in_focus)
+        })
+        .reduce(
+            || none,
+            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2), a.3 + b.3),
+        )
 }
