@@ -6,6 +6,7 @@ use super::fast::Plane;
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::scratch::Scratch;
 use super::strip::{LayerCx, run_strip, strip_rows};
+use super::stripes;
 use super::uniform;
 use crate::config::{AlphaNorm, DofCfg};
 use crate::fixed::{Overflow, QFormat, Quant, Quantizer, RoundShift, round_shift, round_shift_i64};
@@ -199,8 +200,10 @@ pub enum Exec {
     /// not the frame: the default ([`STRIP_ROWS`]). A strip is at least `8 M` rows (the
     /// rows read twice stay a quarter at most) and starts at an image row that is a
     /// multiple of its height, itself a multiple of 16, so the 16x16 tiles of
-    /// `dof.skip_uniform_tiles` never straddle two. With overflow ERROR a layer is one
-    /// strip (the first overflow stops the run, so the passes keep their whole-box order).
+    /// `dof.skip_uniform_tiles` never straddle two. All layers run in one parallel region of
+    /// row stripes ([`super::stripes`]), except with overflow ERROR, where a layer is one
+    /// strip (the first overflow stops the run, so the passes keep their whole-box order),
+    /// or with disc layers. `observe` is only called for a layer run as one strip.
     Strips(usize),
 }
 
@@ -301,96 +304,116 @@ fn exec_with<P: Plane>(
     let threads = rayon::current_num_threads().max(1);
     let mut pool: Vec<Mutex<Scratch<P>>> = buffers.reuse();
     pool.resize_with(threads, || Mutex::new(Scratch::new()));
-    for (l, layer) in plan.layers.iter().enumerate() {
-        let Some((x0, y0, x1, y1)) = boxes[l] else {
-            continue;
-        };
-        let (bw, bh) = (x1 - x0, y1 - y0);
-        if let Some(mask) = &layer.disc {
-            let boxr = (x0, y0, bw, bh);
-            super::disc::layer_fixed(img, plan, l, mask, boxr, p, &mut out, &mut def, &mut work)?;
-            continue;
+    // The default: all layers in one parallel region of row stripes.
+    let stripe_rows = match exec {
+        Exec::Strips(rows)
+            if p.overflow != Overflow::Error && plan.layers.iter().all(|l| l.disc.is_none()) =>
+        {
+            Some(rows)
         }
-        let c = &layer.coef;
-        let wx = border_sums(c, w);
-        let wy = border_sums(c, h);
-        if layer.m == 0 {
-            // sigma = 0: the mask is the identity; pass through.
-            let n = passthrough(img, plan, l, (x0, y0, bw, bh), p, &mut out, &mut def);
-            work.passthrough += n;
-            work.composites += n;
-            continue;
-        }
-        let strip = match exec {
-            Exec::Strips(rows) if p.overflow != Overflow::Error => rows
-                .max(8 * layer.m)
-                .next_multiple_of(uniform::UNIFORM_TILE),
-            _ => usize::MAX,
-        };
-        let cp: Vec<P> = c.iter().map(|&v| P::put(v)).collect();
-        let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
-        let cx = LayerCx {
-            img,
-            plan,
-            p,
-            exec,
-            l,
-            m: layer.m,
-            c,
-            cp: &cp,
-            boxr: (x0, y0, bw, bh),
-            wx: &wx,
-            wy: &wy,
-            bsx: &bsx,
-            bsy: &bsy,
-        };
-        let strips = strip_rows(y0, bh, strip);
-        // The box's rows of the image, one slice per strip.
-        let rows = &mut out[y0 * w..(y0 + bh) * w];
-        let drows = &mut def[y0 * w..(y0 + bh) * w];
-        if strips.len() == 1 {
-            let mut sk = 0;
-            run_strip(
-                &cx,
-                &mut pool[0].lock().expect("scratch"),
-                (0, bh),
-                rows,
-                drows,
-                &mut work,
-                &mut sk,
-                Some(&mut observe),
-            )?;
-            skipped[l] += sk;
-        } else {
-            let mut parts = Vec::with_capacity(strips.len());
-            let (mut rest, mut drest) = (rows, drows);
-            for &(r0, r1) in &strips {
-                let (o, r) = rest.split_at_mut((r1 - r0) * w);
-                let (d, dr) = drest.split_at_mut((r1 - r0) * w);
-                parts.push(((r0, r1), o, d));
-                (rest, drest) = (r, dr);
+        _ => None,
+    };
+    if let Some(rows) = stripe_rows {
+        let (wk, sk) = stripes::run(img, plan, p, rows, &boxes, &pool, &mut out, &mut def)?;
+        work.add(&wk);
+        skipped = sk;
+    } else {
+        for (l, layer) in plan.layers.iter().enumerate() {
+            let Some((x0, y0, x1, y1)) = boxes[l] else {
+                continue;
+            };
+            let (bw, bh) = (x1 - x0, y1 - y0);
+            if let Some(mask) = &layer.disc {
+                let boxr = (x0, y0, bw, bh);
+                super::disc::layer_fixed(
+                    img, plan, l, mask, boxr, p, &mut out, &mut def, &mut work,
+                )?;
+                continue;
             }
-            // Each strip on a thread with that thread's scratch; counts summed in strip
-            // order (integers: the same on any thread count).
-            let done: Vec<Result<(DofWork, u64), (String, u32)>> = parts
-                .into_par_iter()
-                .map(|(r, o, d)| {
-                    let t = rayon::current_thread_index().unwrap_or(0) % pool.len();
-                    let mut s = pool[t].lock().expect("scratch");
-                    let (mut wk, mut sk) = (DofWork::default(), 0);
-                    run_strip(&cx, &mut s, r, o, d, &mut wk, &mut sk, None)?;
-                    Ok((wk, sk))
-                })
-                .collect();
-            for r in done {
-                let (wk, sk) = r?;
-                work.add(&wk);
+            let c = &layer.coef;
+            let wx = border_sums(c, w);
+            let wy = border_sums(c, h);
+            if layer.m == 0 {
+                // sigma = 0: the mask is the identity; pass through.
+                let rows = y0 * w..(y0 + bh) * w;
+                let boxr = (x0, y0, bw, bh);
+                let (o, d) = (&mut out[rows.clone()], &mut def[rows]);
+                let n = stripes::passthrough(img, plan, l, boxr, (0, bh), p, o, d);
+                work.passthrough += n;
+                work.composites += n;
+                continue;
+            }
+            let strip = match exec {
+                Exec::Strips(rows) if p.overflow != Overflow::Error => rows
+                    .max(8 * layer.m)
+                    .next_multiple_of(uniform::UNIFORM_TILE),
+                _ => usize::MAX,
+            };
+            let cp: Vec<P> = c.iter().map(|&v| P::put(v)).collect();
+            let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
+            let cx = LayerCx {
+                img,
+                plan,
+                p,
+                exec,
+                l,
+                m: layer.m,
+                c,
+                cp: &cp,
+                boxr: (x0, y0, bw, bh),
+                wx: &wx,
+                wy: &wy,
+                bsx: &bsx,
+                bsy: &bsy,
+            };
+            let strips = strip_rows(y0, bh, strip);
+            // The box's rows of the image, one slice per strip.
+            let rows = &mut out[y0 * w..(y0 + bh) * w];
+            let drows = &mut def[y0 * w..(y0 + bh) * w];
+            if strips.len() == 1 {
+                let mut sk = 0;
+                run_strip(
+                    &cx,
+                    &mut pool[0].lock().expect("scratch"),
+                    (0, bh),
+                    rows,
+                    drows,
+                    &mut work,
+                    &mut sk,
+                    Some(&mut observe),
+                )?;
                 skipped[l] += sk;
+            } else {
+                let mut parts = Vec::with_capacity(strips.len());
+                let (mut rest, mut drest) = (rows, drows);
+                for &(r0, r1) in &strips {
+                    let (o, r) = rest.split_at_mut((r1 - r0) * w);
+                    let (d, dr) = drest.split_at_mut((r1 - r0) * w);
+                    parts.push(((r0, r1), o, d));
+                    (rest, drest) = (r, dr);
+                }
+                // Each strip on a thread with that thread's scratch; counts summed in strip
+                // order (integers: the same on any thread count).
+                let done: Vec<Result<(DofWork, u64), (String, u32)>> = parts
+                    .into_par_iter()
+                    .map(|(r, o, d)| {
+                        let t = rayon::current_thread_index().unwrap_or(0) % pool.len();
+                        let mut s = pool[t].lock().expect("scratch");
+                        let (mut wk, mut sk) = (DofWork::default(), 0);
+                        run_strip(&cx, &mut s, r, o, d, &mut wk, &mut sk, None)?;
+                        Ok((wk, sk))
+                    })
+                    .collect();
+                for r in done {
+                    let (wk, sk) = r?;
+                    work.add(&wk);
+                    skipped[l] += sk;
+                }
             }
+            let active = (bw * bh) as u64 - skipped[l];
+            // Both passes, every plane.
+            work.macs += 2 * planes(plan) * c.len() as u64 * active;
         }
-        let active = (bw * bh) as u64 - skipped[l];
-        // Both passes, every plane.
-        work.macs += 2 * planes(plan) * c.len() as u64 * active;
     }
     let mut res = buffers.scratch(out.len(), 0u32);
     work.out_overflows = to_frame(&out, &mut res, frame_fmt, p.guard_bits, p.quant);
@@ -398,46 +421,6 @@ fn exec_with<P: Plane>(
     buffers.give(def);
     buffers.give(pool);
     Ok((res, work, skipped))
-}
-
-/// Layer `l` with sigma 0 (the identity mask) over its box `(x0, y0, bw, bh)`: each
-/// pixel's colour and alpha composited straight into `out`, row by row on the threads.
-/// Returns the pixels passed through.
-fn passthrough(
-    img: &DepthImage<u32>,
-    plan: &LayerPlan,
-    l: usize,
-    (x0, y0, bw, bh): (usize, usize, usize, usize),
-    p: &DofCfg,
-    out: &mut [u64],
-    def: &mut [bool],
-) -> u64 {
-    let w = img.width;
-    let (q, g) = (p.alpha_bits, p.guard_bits);
-    let one_q = 1u128 << q;
-    let rows = out[y0 * w..(y0 + bh) * w].par_chunks_mut(w);
-    rows.zip(def[y0 * w..(y0 + bh) * w].par_chunks_mut(w))
-        .enumerate()
-        .map(|(y, (o, d))| {
-            let r = (y0 + y) * w + x0..(y0 + y) * w + x0 + bw;
-            let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
-            let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
-            let mut n = 0;
-            for x in 0..bw {
-                let (a, b) = share(plan, key[x], cov[x], idx[x], l, img.n2);
-                if a == 0 {
-                    continue;
-                }
-                let (a, b) = (u128::from(a), u128::from(b));
-                let v = u128::from(value[x]) * a;
-                n += 1;
-                let col = round_shift(((v << g) / a) as i128, 0, p.quant) as u128;
-                let aq = (a << q) / b;
-                composite(&mut o[x0 + x], &mut d[x0 + x], col, aq, one_q, q, p.quant);
-            }
-            n
-        })
-        .sum()
 }
 
 /// The composite `out` (with `g` guard bits below the frame LSB) as codes of `frame_fmt`

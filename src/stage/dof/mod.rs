@@ -107,6 +107,7 @@ mod reference;
 mod scratch;
 mod stage;
 mod strip;
+mod stripes;
 mod uniform;
 
 pub use cost::{

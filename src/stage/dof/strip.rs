@@ -1,9 +1,9 @@
 //! One strip of one blurred layer of the fixed layered datapath ([`super::fixed`]): the
 //! strip's input planes (with the `M` rows either side its vertical taps read), its uniform
 //! windows, the horizontal pass into the line buffer, the vertical pass, the layer colour
-//! and alpha, and the composite into the strip's output rows. The strips of a layer write
-//! disjoint rows, so they run in parallel ([`super::fixed::layered_fixed_exec`]); the
-//! layers run one after the other (the composite is back to front).
+//! and alpha, and the composite into the strip's output rows. Strips write disjoint rows,
+//! so they run in parallel: the strips of a layer ([`super::fixed::layered_fixed_exec`]),
+//! or every layer's strip of a stripe of rows, in layer order ([`super::stripes`]).
 
 use super::fast::{self, Plane};
 use super::fixed::{DofWork, Exec, LayerPlanes, composite, row_mac, udiv};
