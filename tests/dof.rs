@@ -225,6 +225,27 @@ fn flat_field_any_code_any_depths_is_bit_identical() {
     }
 }
 
+/// The plan holds a background layer exactly when a pixel shows the background: its depth
+/// code is the background's, or its coverage is partial. One such pixel anywhere in a frame
+/// of more pixels than the plan's parallel chunks (16 384), at and around a chunk's edge.
+#[test]
+fn plan_has_a_background_layer_iff_a_pixel_shows_it() {
+    let (w, h) = (200, 100);
+    let p = params();
+    assert_eq!(Img::new(w, h, 100, 0.5).plan(&p).background, None);
+    for at in [0, 1, 16_383, 16_384, 16_385, w * h - 1] {
+        let mut partial = Img::new(w, h, 100, 0.5);
+        partial.c[at] = 15;
+        assert!(partial.plan(&p).background.is_some(), "coverage 15 at {at}");
+        let mut uncovered = Img::new(w, h, 100, 0.5);
+        uncovered.k[at] = u32::MAX;
+        assert!(
+            uncovered.plan(&p).background.is_some(),
+            "background at {at}"
+        );
+    }
+}
+
 #[test]
 fn single_layer_equals_plain_2d_convolution() {
     let mut rng = Rng::new(7);

@@ -136,16 +136,31 @@ pub fn plan_layers_in(
     pool: &Pool,
 ) -> Result<LayerPlan, String> {
     // The background code (most pixels of a typical frame) is added once, not sorted; nor
-    // is a pixel repeating its left neighbour's code.
-    let mut keys: Vec<u32> = pool.take(key.len() + 1);
-    let before = std::iter::once(&u32::MAX).chain(key);
-    keys.extend(
-        key.iter()
-            .zip(before)
-            .filter(|&(&k, &b)| k != u32::MAX && k != b)
-            .map(|(&k, _)| k),
-    );
-    if key.contains(&u32::MAX) || cov.iter().any(|&c| (c as u32) < n2) {
+    // is a pixel repeating its left neighbour's code (within a chunk: the codes are sorted
+    // and deduplicated next, so where the chunks start does not matter). In chunks on the
+    // threads, each also telling whether it shows the background.
+    debug_assert_eq!(key.len(), cov.len());
+    let parts: Vec<(Vec<u32>, bool)> = key
+        .par_chunks(INDEX_CHUNK)
+        .zip(cov.par_chunks(INDEX_CHUNK))
+        .map(|(kc, cc)| {
+            let mut v = Vec::new();
+            let mut before = u32::MAX;
+            for &k in kc {
+                if k != before && k != u32::MAX {
+                    v.push(k);
+                }
+                before = k;
+            }
+            let bg = kc.contains(&u32::MAX) || cc.iter().any(|&c| u32::from(c) < n2);
+            (v, bg)
+        })
+        .collect();
+    let mut keys: Vec<u32> = pool.take(parts.iter().map(|p| p.0.len()).sum::<usize>() + 1);
+    for (v, _) in &parts {
+        keys.extend_from_slice(v);
+    }
+    if parts.iter().any(|p| p.1) {
         keys.push(u32::MAX);
     }
     let mut tmp: Vec<u32> = pool.scratch(keys.len(), 0);
