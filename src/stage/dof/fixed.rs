@@ -5,7 +5,7 @@
 use super::fast::Plane;
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
 use super::scratch::Scratch;
-use super::strip::{LayerCx, run_strip, strip_rows};
+use super::strip::{LayerTaps, layer_macs, run_strip, strip_rows};
 use super::stripes;
 use super::uniform;
 use crate::config::{AlphaNorm, DofCfg};
@@ -323,20 +323,16 @@ fn exec_with<P: Plane>(
                 continue;
             };
             let (bw, bh) = (x1 - x0, y1 - y0);
+            let boxr = (x0, y0, bw, bh);
             if let Some(mask) = &layer.disc {
-                let boxr = (x0, y0, bw, bh);
                 super::disc::layer_fixed(
                     img, plan, l, mask, boxr, p, &mut out, &mut def, &mut work,
                 )?;
                 continue;
             }
-            let c = &layer.coef;
-            let wx = border_sums(c, w);
-            let wy = border_sums(c, h);
             if layer.m == 0 {
                 // sigma = 0: the mask is the identity; pass through.
                 let rows = y0 * w..(y0 + bh) * w;
-                let boxr = (x0, y0, bw, bh);
                 let (o, d) = (&mut out[rows.clone()], &mut def[rows]);
                 let n = stripes::passthrough(img, plan, l, boxr, (0, bh), p, o, d);
                 work.passthrough += n;
@@ -349,23 +345,8 @@ fn exec_with<P: Plane>(
                     .next_multiple_of(uniform::UNIFORM_TILE),
                 _ => usize::MAX,
             };
-            let cp: Vec<P> = c.iter().map(|&v| P::put(v)).collect();
-            let (bsx, bsy) = (border_sums(c, bw), border_sums(c, bh));
-            let cx = LayerCx {
-                img,
-                plan,
-                p,
-                exec,
-                l,
-                m: layer.m,
-                c,
-                cp: &cp,
-                boxr: (x0, y0, bw, bh),
-                wx: &wx,
-                wy: &wy,
-                bsx: &bsx,
-                bsy: &bsy,
-            };
+            let taps = LayerTaps::<P>::new(plan, l, (w, h), boxr);
+            let cx = taps.cx((img, plan, p), exec, l, boxr);
             let strips = strip_rows(y0, bh, strip);
             // The box's rows of the image, one slice per strip.
             let rows = &mut out[y0 * w..(y0 + bh) * w];
@@ -410,9 +391,7 @@ fn exec_with<P: Plane>(
                     skipped[l] += sk;
                 }
             }
-            let active = (bw * bh) as u64 - skipped[l];
-            // Both passes, every plane.
-            work.macs += 2 * planes(plan) * c.len() as u64 * active;
+            work.macs += layer_macs(plan, l, (bw * bh) as u64 - skipped[l]);
         }
     }
     let mut res = buffers.scratch(out.len(), 0u32);

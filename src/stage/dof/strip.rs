@@ -6,7 +6,7 @@
 //! or every layer's strip of a stripe of rows, in layer order ([`super::stripes`]).
 
 use super::fast::{self, Plane};
-use super::fixed::{DofWork, Exec, LayerPlanes, composite, row_mac, udiv};
+use super::fixed::{DofWork, Exec, LayerPlanes, border_sums, composite, planes, row_mac, udiv};
 use super::layers::{DepthImage, LayerPlan};
 use super::scratch::Scratch;
 use super::uniform;
@@ -33,6 +33,65 @@ pub(super) struct LayerCx<'a, P> {
     pub wy: &'a [u64],
     pub bsx: &'a [u64],
     pub bsy: &'a [u64],
+}
+
+/// What a blurred layer's strips read, owned: its taps as plane words and the in-image and
+/// in-box tap sums along both axes.
+pub(super) struct LayerTaps<P> {
+    cp: Vec<P>,
+    wx: Vec<u64>,
+    wy: Vec<u64>,
+    bsx: Vec<u64>,
+    bsy: Vec<u64>,
+}
+
+impl<P: Plane> LayerTaps<P> {
+    /// Layer `l` of `plan` over its box `boxr = (x0, y0, bw, bh)` of an image of `w x h`.
+    pub fn new(plan: &LayerPlan, l: usize, (w, h): (usize, usize), boxr: Box4) -> Self {
+        let c = &plan.layers[l].coef;
+        Self {
+            cp: c.iter().map(|&v| P::put(v)).collect(),
+            wx: border_sums(c, w),
+            wy: border_sums(c, h),
+            bsx: border_sums(c, boxr.2),
+            bsy: border_sums(c, boxr.3),
+        }
+    }
+
+    /// The strips' shared context of layer `l` over `boxr`, computed as `exec` says.
+    pub fn cx<'a>(
+        &'a self,
+        (img, plan, p): (&'a DepthImage<'a, u32>, &'a LayerPlan, &'a DofCfg),
+        exec: Exec,
+        l: usize,
+        boxr: Box4,
+    ) -> LayerCx<'a, P> {
+        let layer = &plan.layers[l];
+        LayerCx {
+            img,
+            plan,
+            p,
+            exec,
+            l,
+            m: layer.m,
+            c: &layer.coef,
+            cp: &self.cp,
+            boxr,
+            wx: &self.wx,
+            wy: &self.wy,
+            bsx: &self.bsx,
+            bsy: &self.bsy,
+        }
+    }
+}
+
+/// A box `(x0, y0, width, height)`.
+type Box4 = (usize, usize, usize, usize);
+
+/// The multiply-accumulates of a blurred layer over `active` box pixels: both passes, every
+/// plane.
+pub(super) fn layer_macs(plan: &LayerPlan, l: usize, active: u64) -> u64 {
+    2 * planes(plan) * plan.layers[l].coef.len() as u64 * active
 }
 
 /// The output rows `[r0, r1)` of the box per strip of `strip` rows: strips start at image

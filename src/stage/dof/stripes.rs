@@ -7,10 +7,10 @@
 //! the other, and the same on any thread count.
 
 use super::fast::Plane;
-use super::fixed::{DofWork, Exec, border_sums, composite, planes, share};
+use super::fixed::{DofWork, Exec, composite, share};
 use super::layers::{DepthImage, LayerPlan};
 use super::scratch::Scratch;
-use super::strip::{LayerCx, run_strip};
+use super::strip::{LayerCx, LayerTaps, layer_macs, run_strip};
 use super::uniform::UNIFORM_TILE;
 use crate::config::DofCfg;
 use crate::fixed::round_shift;
@@ -23,13 +23,6 @@ pub(super) type LayerBox = Option<(usize, usize, usize, usize)>;
 /// The work counts and per layer the pixels of skipped uniform tiles, or the overflowing
 /// signal.
 type Counted = Result<(DofWork, Vec<u64>), (String, u32)>;
-
-/// What a blurred layer's strips read: its taps as plane words and the in-image and in-box
-/// tap sums along both axes (`wx`, `wy`, `bsx`, `bsy`).
-struct Taps<P> {
-    cp: Vec<P>,
-    sums: [Vec<u64>; 4],
-}
 
 /// Every layer of `plan` (none a disc) over its box `boxes[l]` composited into `out` and
 /// `def`, in stripes of image rows at least `rows` high: the stripe is the largest strip
@@ -48,46 +41,21 @@ pub(super) fn run<P: Plane>(
     def: &mut [bool],
 ) -> Counted {
     let (w, h) = (img.width, img.height);
-    let taps: Vec<Option<Taps<P>>> = plan
-        .layers
-        .iter()
-        .zip(boxes)
-        .map(|(layer, b)| {
-            let (x0, y0, x1, y1) = (*b)?;
-            let c = &layer.coef;
-            (layer.m > 0).then(|| Taps {
-                cp: c.iter().map(|&v| P::put(v)).collect(),
-                sums: [
-                    border_sums(c, w),
-                    border_sums(c, h),
-                    border_sums(c, x1 - x0),
-                    border_sums(c, y1 - y0),
-                ],
-            })
+    // Per blurred layer (sigma above 0) with a box: its taps and sums, and its strips' context.
+    let taps: Vec<Option<LayerTaps<P>>> = (0..plan.layers.len())
+        .map(|l| {
+            let (x0, y0, x1, y1) = boxes[l]?;
+            (plan.layers[l].m > 0)
+                .then(|| LayerTaps::new(plan, l, (w, h), (x0, y0, x1 - x0, y1 - y0)))
         })
         .collect();
     let cxs: Vec<Option<LayerCx<P>>> = taps
         .iter()
         .enumerate()
         .map(|(l, t)| {
-            let t = t.as_ref()?;
             let (x0, y0, x1, y1) = boxes[l]?;
-            let layer = &plan.layers[l];
-            Some(LayerCx {
-                img,
-                plan,
-                p,
-                exec: Exec::Strips(rows),
-                l,
-                m: layer.m,
-                c: &layer.coef,
-                cp: &t.cp,
-                boxr: (x0, y0, x1 - x0, y1 - y0),
-                wx: &t.sums[0],
-                wy: &t.sums[1],
-                bsx: &t.sums[2],
-                bsy: &t.sums[3],
-            })
+            let boxr = (x0, y0, x1 - x0, y1 - y0);
+            Some(t.as_ref()?.cx((img, plan, p), Exec::Strips(rows), l, boxr))
         })
         .collect();
     let stripe = plan
@@ -141,11 +109,10 @@ pub(super) fn run<P: Plane>(
         work.add(&wk);
         skipped.iter_mut().zip(&sk).for_each(|(a, b)| *a += b);
     }
-    for (l, layer) in plan.layers.iter().enumerate() {
-        if let (Some(_), Some((x0, y0, x1, y1))) = (&cxs[l], boxes[l]) {
-            let active = ((x1 - x0) * (y1 - y0)) as u64 - skipped[l];
-            // Both passes, every plane.
-            work.macs += 2 * planes(plan) * layer.coef.len() as u64 * active;
+    for (l, cx) in cxs.iter().enumerate() {
+        if let Some(cx) = cx {
+            let (_, _, bw, bh) = cx.boxr;
+            work.macs += layer_macs(plan, l, (bw * bh) as u64 - skipped[l]);
         }
     }
     Ok((work, skipped))
