@@ -391,7 +391,7 @@ fn footprints_hold_the_fragments(s: &Scene, h: &HwConfig) -> Result<u64, TestCas
             prop_assert_eq!(fp.triangle, Some(v.map(|v| (v.x, v.y))));
         }
         let [x0, y0, x1, y1] = fp.pixels;
-        for f in frags.of(p).flatten() {
+        for f in frags.of(p) {
             let (c, k) = (
                 reg.c0 + f.s as i64 % reg.width() as i64,
                 reg.k0 + f.s as i64 / reg.width() as i64,

@@ -137,7 +137,7 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
         if matches!(q, QPrim::Point { .. }) {
             continue;
         }
-        for f in frags.of(p).flatten() {
+        for f in frags.of(p) {
             let (s, zf) = (f.s as usize, conv(f.z));
             ties += (zf == z[s]) as u64;
             if zf < z[s] {
@@ -157,7 +157,6 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
             QPrim::Point { v, .. } => {
                 let vis = frags
                     .of(p)
-                    .flatten()
                     .filter(|f| conv(f.z) < z[f.s as usize])
                     .map(|f| f.s)
                     .collect();

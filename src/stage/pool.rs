@@ -185,8 +185,8 @@ impl Pool {
         for a in frags {
             if let Ok(f) = Arc::try_unwrap(a) {
                 // Kept whole: the next frame's raster tasks take their parts back in order.
-                self.give(f.parts);
-                self.give(f.spans);
+                self.give(f.runs.parts);
+                self.give(f.runs.spans);
             }
         }
         for a in samples {

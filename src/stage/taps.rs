@@ -17,7 +17,7 @@
 use super::accumulate::{Frame, PointFrags};
 use super::input::QPrim;
 use super::logdomain::{LogAdder, LogCode};
-use super::raster::{FPrim, Frag, FragF};
+use super::raster::{FPrim, FragF, FragRuns};
 use super::setup::Setup;
 use super::visibility::{Samples, SamplesF};
 use crate::fixed::QFormat;
@@ -61,8 +61,8 @@ pub struct FixedTaps {
     pub prims: Option<Arc<Prims>>,
     /// Per-primitive setup (setup).
     pub setups: Option<Arc<Vec<Setup>>>,
-    /// Covered samples per primitive (raster).
-    pub frags: Option<Arc<Frags<Frag>>>,
+    /// Covered samples per primitive (raster), as runs.
+    pub frags: Option<Arc<FragRuns>>,
     /// The sample buffer (visibility; logdomain re-codes it): channel 0's.
     pub samples: Option<Arc<SampleTap>>,
     /// The sample buffers of channels 1.. of a colour render (visibility); the runner
@@ -135,7 +135,7 @@ impl FixedTaps {
         need(&self.setups, "setups").as_slice()
     }
     /// The fragments.
-    pub fn frags(&self) -> &Frags<Frag> {
+    pub fn frags(&self) -> &FragRuns {
         need(&self.frags, "fixed frags")
     }
     /// The sample buffer.

@@ -7,7 +7,8 @@
 //! `walked` samples; rows above the region likewise (`rows_walked`).
 
 use super::Frag;
-use crate::fixed::{Quant, RoundShift};
+use super::runs::{Run, RunCodes};
+use crate::fixed::Quant;
 use crate::stage::setup::{Edge, PointSetup, Setup, TriSetup};
 use crate::stage::{Grid, SampleRegion};
 
@@ -58,17 +59,6 @@ pub struct RasterParams {
     pub channels: usize,
 }
 
-#[inline]
-fn out_code(v: i64, rs: &RoundShift, max: i64, clamped: &mut u64) -> u32 {
-    let c = rs.apply(v);
-    if c < 0 || c > max {
-        *clamped += 1;
-        c.clamp(0, max) as u32
-    } else {
-        c as u32
-    }
-}
-
 /// Left-edge attribute stepping: increments for a column move of `a` or `a + 1`, per
 /// intensity channel and for depth.
 struct EdgeInterp {
@@ -100,11 +90,21 @@ pub fn raster_tri(
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
-    raster_tri_rows(t, p, reg, (reg.k0, reg.k1), true, out, w);
+    let mut runs = Vec::new();
+    raster_tri_rows(t, p, reg, (reg.k0, reg.k1), true, &mut runs, w);
+    expand(&runs, p, out);
+}
+
+/// Appends the fragments of `runs` to `out`.
+fn expand(runs: &[Run], p: &RasterParams, out: &mut Vec<Frag>) {
+    let codes = RunCodes::new(p);
+    for r in runs {
+        codes.for_each(r, |f| out.push(f));
+    }
 }
 
 /// [`raster_tri`] on the sample rows `rows.0..rows.1` of `reg` (a band; fragment indices
-/// stay those of `reg`): the edges are stepped (adds only, no samples) through the rows
+/// stay those of `reg`), as runs (one per span): the edges are stepped (adds only, no samples) through the rows
 /// above the band, which count as `rows_walked`, and their re-seeds as `reseeds`, only when
 /// `above` (the first band, or the whole region); a later band's walk down to its rows
 /// repeats what an earlier band counted. The fragments of the band's rows are exactly those
@@ -115,7 +115,7 @@ pub fn raster_tri_rows(
     reg: &SampleRegion,
     rows: (i64, i64),
     above: bool,
-    out: &mut Vec<Frag>,
+    out: &mut Vec<Run>,
     w: &mut RasterWork,
 ) {
     let (mut long, mut upper, mut lower) = (t.long, t.upper, t.lower);
@@ -132,7 +132,7 @@ pub fn raster_tri_rows(
     let (mut vi, mut vz) = (t.i.map(|a| a.seed), t.z.seed);
     let mut interp = EdgeInterp::new(t.first_left(), &di, dz);
     let width = reg.width();
-    let rs = RoundShift::new(p.guard, p.quant);
+    let codes = RunCodes::new(p);
     let mut k = k_start;
     loop {
         let short = if in_upper { &upper } else { &lower };
@@ -149,26 +149,23 @@ pub fn raster_tri_rows(
                 // The columns left of the region are walked (counted) as the hardware
                 // steps them: `n` adds of the column gradient are one multiply here.
                 let n = c_start - lq;
-                let (mut si, mut sz) = (vi, vz + dz.0 * n);
+                let (mut si, sz) = (vi, vz + dz.0 * n);
                 for ch in 0..nc {
                     si[ch] += di[ch].0 * n;
                 }
                 w.walked += n as u64;
                 let row = (k - reg.k0) as usize * width;
-                let s0 = (row + (c_start - reg.c0) as usize) as u32;
-                let mut clamped = 0;
-                out.extend((0..(c_end - c_start) as u32).map(|j| {
-                    let mut i = [0u32; 3];
-                    for ch in 0..nc {
-                        i[ch] = out_code(si[ch], &rs, p.i_max[ch], &mut clamped);
-                        si[ch] += di[ch].0;
-                    }
-                    let z = out_code(sz, &rs, p.z_max, &mut clamped);
-                    sz += dz.0;
-                    Frag { s: s0 + j, z, i }
-                }));
-                w.clamped += clamped;
-                w.samples += (c_end - c_start) as u64;
+                let run = Run {
+                    s: (row + (c_start - reg.c0) as usize) as u32,
+                    n: (c_end - c_start) as u32,
+                    z: sz,
+                    dz: dz.0,
+                    i: si,
+                    di: di.map(|d| d.0),
+                };
+                w.clamped += codes.clamped(&run);
+                w.samples += u64::from(run.n);
+                out.push(run);
             }
         } else if above {
             w.rows_walked += 1;
@@ -216,7 +213,7 @@ pub fn raster_point(
     p: &RasterParams,
     reg: &SampleRegion,
     rows: (i64, i64),
-    out: &mut Vec<Frag>,
+    out: &mut Vec<Run>,
     w: &mut RasterWork,
 ) {
     let (c0, c1) = (pt.c.0.max(reg.c0), pt.c.1.min(reg.c1));
@@ -224,17 +221,19 @@ pub fn raster_point(
     if c0 >= c1 || k0 >= k1 {
         return;
     }
-    let z = pt.z.clamp(0, p.z_max) as u32;
-    let i: [u32; 3] = std::array::from_fn(|c| pt.i[c].clamp(0, p.i_max[c]) as u32);
+    // Flat codes, in range: with the guard bits below them every rounding gives them back.
+    let z = pt.z.clamp(0, p.z_max) << p.guard;
+    let i: [i64; 3] = std::array::from_fn(|c| pt.i[c].clamp(0, p.i_max[c]) << p.guard);
     for k in k0..k1 {
         w.spans += 1;
-        for c in c0..c1 {
-            out.push(Frag {
-                s: reg.index(c, k) as u32,
-                z,
-                i,
-            });
-        }
+        out.push(Run {
+            s: reg.index(c0, k) as u32,
+            n: (c1 - c0) as u32,
+            z,
+            dz: 0,
+            i,
+            di: [0; 3],
+        });
     }
     w.samples += ((c1 - c0) * (k1 - k0)) as u64;
 }
@@ -247,18 +246,20 @@ pub fn raster(
     out: &mut Vec<Frag>,
     w: &mut RasterWork,
 ) {
-    raster_rows(s, p, reg, (reg.k0, reg.k1), true, out, w);
+    let mut runs = Vec::new();
+    raster_rows(s, p, reg, (reg.k0, reg.k1), true, &mut runs, w);
+    expand(&runs, p, out);
 }
 
 /// [`raster`] on the sample rows `rows.0..rows.1` of `reg` (see [`raster_tri_rows`] for
-/// `above`); the fragment indices are those of `reg`.
+/// `above`), as runs; the fragment indices are those of `reg`.
 pub fn raster_rows(
     s: &Setup,
     p: &RasterParams,
     reg: &SampleRegion,
     rows: (i64, i64),
     above: bool,
-    out: &mut Vec<Frag>,
+    out: &mut Vec<Run>,
     w: &mut RasterWork,
 ) {
     match s {

@@ -3,15 +3,18 @@
 //! at the same sample positions ([`float`]).
 //!
 //! The stage emits, per primitive, the samples it covers (a fragment: sample index, depth
-//! and intensity codes) in the order the walker visits them; visibility resolves them.
+//! and intensity codes) in the order the walker visits them, held as runs, one per span
+//! ([`runs`]); visibility resolves them, taking each sample's codes from the run.
 
 pub mod fixed;
 pub mod float;
+pub mod runs;
 
 pub use fixed::{
     RasterParams, RasterWork, raster, raster_point, raster_rows, raster_tri, raster_tri_rows,
 };
 pub use float::{FPrim, FVertex, raster_f64, raster_tri_f64};
+pub use runs::{FragRuns, Run, RunCodes};
 
 pub use super::SampleRegion;
 use super::input::QPrim;
@@ -165,7 +168,7 @@ impl Stage for Raster {
         let bands = band_rows(&reg);
         let n = setups.len();
         // Last frame's parts, whose sizes fit the same scene's.
-        let mut bufs: Vec<Vec<Frag>> = cx.pool.reuse();
+        let mut bufs: Vec<Vec<Run>> = cx.pool.reuse();
         let mut span_bufs: Vec<Vec<Span>> = cx.pool.reuse();
         bufs.resize_with(bands.len(), Vec::new);
         span_bufs.resize_with(bands.len(), Vec::new);
@@ -214,7 +217,10 @@ impl Stage for Raster {
         let prims = &taps.fixed.prims().q;
         let order = processing_order(|i| matches!(prims[i], QPrim::Point { .. }), prims.len());
         let tokens = order.iter().map(|&i| stepped[i]).collect();
-        taps.fixed.frags = Some(Arc::new(out));
+        taps.fixed.frags = Some(Arc::new(FragRuns {
+            runs: out,
+            codes: RunCodes::new(&p),
+        }));
         let clamped = SignalStats::overflow_counter(
             "raster.clamped",
             cx.hw.input.intensity.format,
@@ -264,7 +270,7 @@ impl Stage for Raster {
                 continue;
             }
             fx.clear();
-            frags.of(p).for_each(|f| fx.extend_from_slice(f));
+            fx.extend(frags.of(p));
             fl.clear();
             raster_f64(&FPrim::from_q(q, grid.sub_bits), &grid, &reg, &mut fl);
             // A line is two triangles: sort both lists so they merge by sample.

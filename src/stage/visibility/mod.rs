@@ -7,7 +7,7 @@
 
 use super::accumulate::PointFrags;
 use super::input::QPrim;
-use super::raster::{Frag, FragF};
+use super::raster::{Frag, FragF, Run, RunCodes};
 use super::taps::{SampleCoding, SampleTap, Taps, processing_order};
 use super::{
     Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, SampleRegion, Stage, StageId,
@@ -179,39 +179,80 @@ impl Part<'_> {
     }
 }
 
-/// Depth-tests `frags`, fragments of surface `prim` that fall in `part`, into it (channel
-/// 0's intensity into `i`, channel `c + 1`'s into `extra[c]`); counts the writes and
-/// clamps (the tests are the fragments, counted by the caller).
-pub fn resolve(frags: &[Frag], prim: u32, zc: &ZConvert, part: &mut Part, w: &mut VisWork) {
+/// Depth-tests the fragments of `runs`, runs of surface `prim` that fall in `part`
+/// (their codes `codes`), into it (channel 0's intensity into `i`, channel `c + 1`'s into
+/// `extra[c]`); counts the tests, writes and clamps.
+pub fn resolve(
+    runs: &[Run],
+    codes: &RunCodes,
+    prim: u32,
+    zc: &ZConvert,
+    part: &mut Part,
+    w: &mut VisWork,
+) {
     let s0 = part.s0;
-    let (mut writes, mut clamped) = (0, 0);
-    for f in frags {
-        let s = f.s as usize - s0;
-        let z = zc.apply(f.z, &mut clamped);
-        if z < part.z[s] {
-            part.z[s] = z;
-            part.prim[s] = prim;
-            part.i[s] = f.i[0];
-            for (c, plane) in part.extra.iter_mut().enumerate() {
-                plane[s] = f.i[c + 1];
+    let (mut tests, mut writes, mut clamped) = (0, 0, 0);
+    for r in runs {
+        let at = r.s as usize - s0;
+        let n = r.n as usize;
+        tests += r.n as u64;
+        let (z_buf, prim_buf, i_buf) = (
+            &mut part.z[at..at + n],
+            &mut part.prim[at..at + n],
+            &mut part.i[at..at + n],
+        );
+        if part.extra.is_empty() {
+            // One channel: the intensity code is rounded where the test passes.
+            let (mut z, mut i) = (r.z, r.i[0]);
+            for ((zb, pb), ib) in z_buf.iter_mut().zip(prim_buf.iter_mut()).zip(i_buf) {
+                let zv = zc.apply(codes.z_code(z), &mut clamped);
+                if zv < *zb {
+                    *zb = zv;
+                    *pb = prim;
+                    *ib = codes.i_code(i, 0);
+                    writes += 1;
+                }
+                z = z.wrapping_add(r.dz);
+                i = i.wrapping_add(r.di[0]);
             }
-            writes += 1;
+            continue;
         }
+        let extra = &mut part.extra;
+        let mut j = 0;
+        codes.for_each(r, |f| {
+            let z = zc.apply(f.z, &mut clamped);
+            if z < z_buf[j] {
+                z_buf[j] = z;
+                prim_buf[j] = prim;
+                i_buf[j] = f.i[0];
+                for (c, plane) in extra.iter_mut().enumerate() {
+                    plane[at + j] = f.i[c + 1];
+                }
+                writes += 1;
+            }
+            j += 1;
+        });
     }
+    w.tests += tests;
     w.writes += writes;
     w.clamped += clamped;
 }
 
 /// Visible samples of a light point (tested, not written).
-pub fn point_visible(frags: &[Frag], zc: &ZConvert, buf: &Samples, w: &mut VisWork) -> Vec<u32> {
-    let mut out = Vec::with_capacity(frags.len());
+pub fn point_visible(
+    frags: impl Iterator<Item = Frag>,
+    zc: &ZConvert,
+    buf: &Samples,
+    w: &mut VisWork,
+) -> Vec<u32> {
+    let mut out = Vec::new();
     for f in frags {
         let z = zc.apply(f.z, &mut w.clamped);
+        w.point_tests += 1;
         if z < buf.z[f.s as usize] {
             out.push(f.s);
         }
     }
-    w.point_tests += frags.len() as u64;
     w.point_visible += out.len() as u64;
     out
 }
@@ -334,34 +375,46 @@ impl Stage for Visibility {
         let bg_codes = prims.bg;
         let n = prims.q.len();
         let surface = |p: usize| !matches!(prims.q[p], QPrim::Point { .. });
-        let mut tests: Vec<u64> = (0..n)
-            .map(|p| if surface(p) { frags.count(p) as u64 } else { 0 })
-            .collect();
-        w.tests = tests.iter().sum();
         // The raster's parts are bands of sample rows: each part of the buffer resolves its
         // own band's fragments, surface by surface in primitive order; the counts are
         // integers summed in part order.
-        let mut cut = parts(&mut buf, &mut extra, &frags.bounds);
+        let codes = &frags.codes;
+        let mut cut = parts(&mut buf, &mut extra, &frags.runs.bounds);
         // Parts without fragments (none when the raster's bands cover the region) are
         // cleared here.
-        for part in cut.iter_mut().skip(frags.parts.len()) {
+        for part in cut.iter_mut().skip(frags.runs.parts.len()) {
             part.clear(&bg_codes);
         }
-        let done: Vec<VisWork> = cut
+        let done: Vec<(VisWork, Vec<(u32, u64)>)> = cut
             .into_par_iter()
-            .zip(frags.parts.par_iter().zip(&frags.spans))
+            .zip(frags.runs.parts.par_iter().zip(&frags.runs.spans))
             .map(|(mut part, (data, spans))| {
                 part.clear(&bg_codes);
                 let mut wk = VisWork::default();
+                let mut tested = Vec::with_capacity(spans.len());
                 for sp in spans.iter().filter(|sp| surface(sp.prim as usize)) {
-                    resolve(&data[sp.a..sp.b], sp.prim + 1, &zc, &mut part, &mut wk);
+                    let before = wk.tests;
+                    resolve(
+                        &data[sp.a..sp.b],
+                        codes,
+                        sp.prim + 1,
+                        &zc,
+                        &mut part,
+                        &mut wk,
+                    );
+                    tested.push((sp.prim, wk.tests - before));
                 }
-                wk
+                (wk, tested)
             })
             .collect();
-        for wk in done {
+        let mut tests = vec![0u64; n];
+        for (wk, tested) in done {
+            w.tests += wk.tests;
             w.writes += wk.writes;
             w.clamped += wk.clamped;
+            for (p, k) in tested {
+                tests[p as usize] += k;
+            }
         }
         let i_max: Vec<i64> = (0..channels)
             .map(|c| {
@@ -374,10 +427,7 @@ impl Stage for Visibility {
         for (p, q) in prims.q.iter().enumerate() {
             let QPrim::Point { v, .. } = q else { continue };
             let before = w.point_tests;
-            let vis: Vec<u32> = frags
-                .of(p)
-                .flat_map(|f| point_visible(f, &zc, &buf, &mut w))
-                .collect();
+            let vis = point_visible(frags.of(p), &zc, &buf, &mut w);
             tests[p] = w.point_tests - before;
             for (c, pts) in points.iter_mut().enumerate() {
                 pts.push(PointFrags {
@@ -464,7 +514,7 @@ impl Stage for Visibility {
                 continue;
             }
             exact.clear();
-            exact.extend(frags.of(p).flatten().map(|x| FragF {
+            exact.extend(frags.of(p).map(|x| FragF {
                 s: x.s,
                 z: x.z as f64,
                 i: x.i.map(|i| i as f64),
