@@ -113,6 +113,20 @@ impl RoundShift {
         self.shift
     }
 
+    /// Whether [`RoundShift::apply_small`] rounds `raw` (its bias cannot leave `i64`).
+    #[inline(always)]
+    pub fn is_small(raw: i64) -> bool {
+        raw.unsigned_abs() <= 1 << 62
+    }
+
+    /// [`RoundShift::apply`] for a `raw` that [`RoundShift::is_small`] accepts: no overflow
+    /// check, so a loop over such values vectorises.
+    #[inline(always)]
+    pub fn apply_small(&self, raw: i64) -> i64 {
+        let bias = if raw < 0 { self.neg } else { self.pos } + ((raw >> self.shift) & self.conv);
+        raw.wrapping_add(bias) >> self.shift
+    }
+
     /// `raw * 2^-shift` rounded.
     #[inline(always)]
     pub fn apply(&self, raw: i64) -> i64 {

@@ -49,9 +49,19 @@ impl RunCodes {
         }
     }
 
-    /// The guard bits.
-    pub fn guard(&self) -> u32 {
-        self.rs.shift()
+    /// The rounding of the guard bits.
+    pub fn rounding(&self) -> RoundShift {
+        self.rs
+    }
+
+    /// The largest depth code.
+    pub fn z_max(&self) -> i64 {
+        self.z_max
+    }
+
+    /// Channel `c`'s largest intensity code.
+    pub fn i_max(&self, c: usize) -> i64 {
+        self.i_max[c]
     }
 
     #[inline(always)]

@@ -7,7 +7,7 @@
 
 use super::accumulate::PointFrags;
 use super::input::QPrim;
-use super::raster::{Frag, FragF, Run, RunCodes};
+use super::raster::{Frag, FragF};
 use super::taps::{SampleCoding, SampleTap, Taps, processing_order};
 use super::{
     Cost, Cx, Facts, LocalError, MemImage, Memory, Need, Notes, SampleRegion, Stage, StageId,
@@ -21,7 +21,9 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 mod float;
+mod resolve;
 pub use float::{SamplesF, float_samples, point_visible_f64, resolve_f64};
+pub use resolve::resolve;
 
 /// Primitive id of the background (samples no surface covered).
 pub const BACKGROUND: u32 = 0;
@@ -177,65 +179,6 @@ impl Part<'_> {
             plane.fill(b);
         }
     }
-}
-
-/// Depth-tests the fragments of `runs`, runs of surface `prim` that fall in `part`
-/// (their codes `codes`), into it (channel 0's intensity into `i`, channel `c + 1`'s into
-/// `extra[c]`); counts the tests, writes and clamps.
-pub fn resolve(
-    runs: &[Run],
-    codes: &RunCodes,
-    prim: u32,
-    zc: &ZConvert,
-    part: &mut Part,
-    w: &mut VisWork,
-) {
-    let s0 = part.s0;
-    let (mut tests, mut writes, mut clamped) = (0, 0, 0);
-    for r in runs {
-        let at = r.s as usize - s0;
-        let n = r.n as usize;
-        tests += r.n as u64;
-        let (z_buf, prim_buf, i_buf) = (
-            &mut part.z[at..at + n],
-            &mut part.prim[at..at + n],
-            &mut part.i[at..at + n],
-        );
-        if part.extra.is_empty() {
-            // One channel: the intensity code is rounded where the test passes.
-            let (mut z, mut i) = (r.z, r.i[0]);
-            for ((zb, pb), ib) in z_buf.iter_mut().zip(prim_buf.iter_mut()).zip(i_buf) {
-                let zv = zc.apply(codes.z_code(z), &mut clamped);
-                if zv < *zb {
-                    *zb = zv;
-                    *pb = prim;
-                    *ib = codes.i_code(i, 0);
-                    writes += 1;
-                }
-                z = z.wrapping_add(r.dz);
-                i = i.wrapping_add(r.di[0]);
-            }
-            continue;
-        }
-        let extra = &mut part.extra;
-        let mut j = 0;
-        codes.for_each(r, |f| {
-            let z = zc.apply(f.z, &mut clamped);
-            if z < z_buf[j] {
-                z_buf[j] = z;
-                prim_buf[j] = prim;
-                i_buf[j] = f.i[0];
-                for (c, plane) in extra.iter_mut().enumerate() {
-                    plane[at + j] = f.i[c + 1];
-                }
-                writes += 1;
-            }
-            j += 1;
-        });
-    }
-    w.tests += tests;
-    w.writes += writes;
-    w.clamped += clamped;
 }
 
 /// Visible samples of a light point (tested, not written).

@@ -1,0 +1,265 @@
+//! The depth test of a surface's runs ([`crate::stage::raster::runs`]) into a part of the
+//! sample buffer. A grey run whose values stay in range (checked at its two ends: the
+//! roundings are monotonic, the values linear) takes a kernel with no clamp, no overflow
+//! check and no branch per sample, which the compiler vectorises (AVX2 where the CPU has
+//! it); every other run takes the raster's own per-sample codes. Both give the same tests,
+//! writes and codes, sample by sample (`tests::fast_runs_match_the_codes_one_by_one`).
+
+use super::{Part, VisWork, ZConvert};
+use crate::fixed::RoundShift;
+use crate::stage::raster::{Run, RunCodes};
+
+/// Depth-tests the fragments of `runs`, runs of surface `prim` that fall in `part`
+/// (their codes `codes`), into it (channel 0's intensity into `i`, channel `c + 1`'s into
+/// `extra[c]`); counts the tests, writes and clamps.
+pub fn resolve(
+    runs: &[Run],
+    codes: &RunCodes,
+    prim: u32,
+    zc: &ZConvert,
+    part: &mut Part,
+    w: &mut VisWork,
+) {
+    let s0 = part.s0;
+    let avx2 = simd::avx2();
+    let (mut tests, mut writes, mut clamped) = (0, 0, 0);
+    for r in runs {
+        let at = r.s as usize - s0;
+        let n = r.n as usize;
+        tests += u64::from(r.n);
+        let (z_buf, prim_buf, i_buf) = (
+            &mut part.z[at..at + n],
+            &mut part.prim[at..at + n],
+            &mut part.i[at..at + n],
+        );
+        if part.extra.is_empty() {
+            if let Some(k) = Kernel::of(r, codes, zc) {
+                writes += if avx2 {
+                    simd::grey_avx2(&k, prim, (z_buf, prim_buf, i_buf))
+                } else {
+                    grey(&k, prim, (z_buf, prim_buf, i_buf))
+                };
+                continue;
+            }
+            let (mut z, mut i) = (r.z, r.i[0]);
+            for ((zb, pb), ib) in z_buf.iter_mut().zip(prim_buf.iter_mut()).zip(i_buf) {
+                let zv = zc.apply(codes.z_code(z), &mut clamped);
+                if zv < *zb {
+                    *zb = zv;
+                    *pb = prim;
+                    *ib = codes.i_code(i, 0);
+                    writes += 1;
+                }
+                z = z.wrapping_add(r.dz);
+                i = i.wrapping_add(r.di[0]);
+            }
+            continue;
+        }
+        let extra = &mut part.extra;
+        let mut j = 0;
+        codes.for_each(r, |f| {
+            let z = zc.apply(f.z, &mut clamped);
+            if z < z_buf[j] {
+                z_buf[j] = z;
+                prim_buf[j] = prim;
+                i_buf[j] = f.i[0];
+                for (c, plane) in extra.iter_mut().enumerate() {
+                    plane[at + j] = f.i[c + 1];
+                }
+                writes += 1;
+            }
+            j += 1;
+        });
+    }
+    w.tests += tests;
+    w.writes += writes;
+    w.clamped += clamped;
+}
+
+/// A grey run whose every value rounds into range with no overflow: its start values,
+/// steps and the two roundings of depth (the raster's, then the z-buffer's).
+struct Kernel {
+    z: i64,
+    dz: i64,
+    i: i64,
+    di: i64,
+    raster: RoundShift,
+    zbuf: RoundShift,
+}
+
+impl Kernel {
+    /// The kernel of `r`, if its end values show that no value of it clamps or overflows.
+    fn of(r: &Run, codes: &RunCodes, zc: &ZConvert) -> Option<Self> {
+        let last = i64::from(r.n) - 1;
+        let end = |v: i64, d: i64| d.checked_mul(last).and_then(|x| x.checked_add(v));
+        let (ez, ei) = (end(r.z, r.dz)?, end(r.i[0], r.di[0])?);
+        let raster = codes.rounding();
+        let small = [r.z, ez, r.i[0], ei].into_iter().all(RoundShift::is_small);
+        let z_ok = |v: i64| {
+            let c = raster.apply_small(v);
+            // The raster's depth code unclamped, and the z-buffer's code of it in range.
+            c >= 0 && c <= codes.z_max() && zc.round.apply(c) <= i64::from(zc.max)
+        };
+        let i_ok = |v: i64| (0..=codes.i_max(0)).contains(&raster.apply_small(v));
+        (small && z_ok(r.z) && z_ok(ez) && i_ok(r.i[0]) && i_ok(ei)).then_some(Self {
+            z: r.z,
+            dz: r.dz,
+            i: r.i[0],
+            di: r.di[0],
+            raster,
+            zbuf: zc.round,
+        })
+    }
+}
+
+/// The depth test of kernel `k`'s samples into the planes `(z, prim, i)` (one per sample
+/// of the run): branch-free selects. Returns the writes.
+#[inline(always)]
+fn grey(k: &Kernel, prim: u32, (zb, pb, ib): (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
+    let (mut z, mut i) = (k.z, k.i);
+    let mut writes = 0;
+    for ((zb, pb), ib) in zb.iter_mut().zip(pb.iter_mut()).zip(ib.iter_mut()) {
+        let zv = k.zbuf.apply_small(k.raster.apply_small(z)) as u32;
+        let iv = k.raster.apply_small(i) as u32;
+        let win = zv < *zb;
+        *zb = if win { zv } else { *zb };
+        *pb = if win { prim } else { *pb };
+        *ib = if win { iv } else { *ib };
+        writes += u64::from(win);
+        z = z.wrapping_add(k.dz);
+        i = i.wrapping_add(k.di);
+    }
+    writes
+}
+
+#[cfg(target_arch = "x86_64")]
+mod simd {
+    use super::Kernel;
+
+    pub fn avx2() -> bool {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+
+    /// [`super::grey`] compiled with AVX2; call only when [`avx2`] holds.
+    #[inline]
+    pub fn grey_avx2(k: &Kernel, prim: u32, planes: (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
+        #[target_feature(enable = "avx2")]
+        fn run(k: &Kernel, prim: u32, planes: (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
+            super::grey(k, prim, planes)
+        }
+        debug_assert!(avx2());
+        // SAFETY: `run` is safe code compiled with AVX2 enabled; `resolve` calls this only
+        // after `avx2()` found the feature on this CPU.
+        unsafe { run(k, prim, planes) }
+    }
+}
+
+/// Other targets: the portable build only.
+#[cfg(not(target_arch = "x86_64"))]
+mod simd {
+    use super::Kernel;
+
+    pub fn avx2() -> bool {
+        false
+    }
+
+    pub fn grey_avx2(k: &Kernel, prim: u32, planes: (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
+        super::grey(k, prim, planes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Kernel, grey, resolve, simd};
+    use crate::fixed::{Quant, RoundShift};
+    use crate::stage::Grid;
+    use crate::stage::raster::{RasterParams, Run, RunCodes};
+    use crate::stage::visibility::{Part, VisWork, ZConvert};
+    use proptest::prelude::*;
+
+    fn setup(guard: u32, q: usize, zs: u32) -> (RunCodes, ZConvert) {
+        let quant = Quant::ALL[q];
+        let codes = RunCodes::new(&RasterParams {
+            grid: Grid::new(4, 4, 8, 8),
+            guard,
+            quant,
+            i_max: [4095; 3],
+            z_max: (1 << 24) - 1,
+            channels: 1,
+        });
+        let zc = ZConvert {
+            round: RoundShift::new(zs, quant),
+            max: (1 << (24 - zs)) - 1,
+        };
+        (codes, zc)
+    }
+
+    proptest! {
+        /// Every grey run, fast kernel (portable and AVX2) or not, depth-tests its samples
+        /// as the raster's per-sample codes do: the same planes, writes and clamps.
+        #[test]
+        fn fast_runs_match_the_codes_one_by_one(
+            guard in 0u32..=24,
+            q in 0usize..7,
+            zs in 0u32..8,
+            (z, dz) in (-(1i64 << 20)..(1i64 << 50), -(1i64 << 36)..(1i64 << 36)),
+            (i, di) in (-(1i64 << 20)..(1i64 << 40), -(1i64 << 30)..(1i64 << 30)),
+            n in 1u32..40,
+            old in prop::collection::vec(0u32..(1 << 20), 43),
+        ) {
+            let (codes, zc) = setup(guard, q, zs);
+            let r = Run { s: 3, n, z, dz, i: [i, 0, 0], di: [di, 0, 0] };
+            let len = 3 + n as usize;
+            // The reference: the raster's codes, one sample at a time.
+            let (mut z_want, mut p_want, mut i_want) = (old[..len].to_vec(), vec![9u32; len], vec![7u32; len]);
+            let (mut writes, mut clamped) = (0u64, 0u64);
+            codes.for_each(&r, |f| {
+                let zv = zc.apply(f.z, &mut clamped);
+                let s = f.s as usize;
+                if zv < z_want[s] {
+                    (z_want[s], p_want[s], i_want[s]) = (zv, 5, f.i[0]);
+                    writes += 1;
+                }
+            });
+            let (mut z_got, mut p_got, mut i_got) = (old[..len].to_vec(), vec![9u32; len], vec![7u32; len]);
+            let mut part = Part { s0: 0, z: &mut z_got, prim: &mut p_got, i: &mut i_got, extra: Vec::new() };
+            let mut w = VisWork::default();
+            resolve(&[r], &codes, 5, &zc, &mut part, &mut w);
+            prop_assert_eq!((w.tests, w.writes, w.clamped), (u64::from(n), writes, clamped));
+            prop_assert_eq!(&z_got, &z_want);
+            prop_assert_eq!(&p_got, &p_want);
+            prop_assert_eq!(&i_got, &i_want);
+            // Both builds of the kernel, where it applies.
+            if let Some(k) = Kernel::of(&r, &codes, &zc) {
+                for avx2 in [false, true] {
+                    if avx2 && !simd::avx2() {
+                        continue;
+                    }
+                    let (mut zk, mut pk, mut ik) = (old[3..len].to_vec(), vec![9u32; n as usize], vec![7u32; n as usize]);
+                    let planes = (&mut zk[..], &mut pk[..], &mut ik[..]);
+                    let wk = if avx2 { simd::grey_avx2(&k, 5, planes) } else { grey(&k, 5, planes) };
+                    prop_assert_eq!(wk, writes);
+                    prop_assert_eq!(&zk[..], &z_want[3..]);
+                    prop_assert_eq!(&ik[..], &i_want[3..]);
+                }
+            }
+        }
+    }
+
+    /// The generated runs reach the fast kernel (the property above is not vacuous).
+    #[test]
+    fn in_range_runs_take_the_kernel() {
+        let (codes, zc) = setup(14, 2, 4);
+        let r = Run {
+            s: 0,
+            n: 16,
+            z: 1000 << 14,
+            dz: 3 << 10,
+            i: [200 << 14, 0, 0],
+            di: [1 << 12, 0, 0],
+        };
+        assert!(Kernel::of(&r, &codes, &zc).is_some());
+        let out = Run { z: -(1 << 20), ..r };
+        assert!(Kernel::of(&out, &codes, &zc).is_none());
+    }
+}
