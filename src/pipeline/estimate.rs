@@ -5,8 +5,9 @@
 //! size of the primitives) instead of aborting on an allocation.
 //!
 //! The estimate is a sum of named parts in bytes, from the sizes of the model's buffers (a
-//! fixed sample is 12 bytes, a float one 20; a fixed fragment 12, a float one 24; see
-//! `docs/reliability.md` for the measured peak against the estimate).
+//! fixed sample is 12 bytes, a float one 20; a float fragment 24; the fixed raster's run,
+//! one per primitive and sample row, 72; see `docs/reliability.md` for the measured peak
+//! against the estimate).
 
 use super::plan::Plan;
 use crate::scene::{HostScene, Primitive};
@@ -76,19 +77,43 @@ fn per_sample(plan: &Plan, opts: RunOptions) -> f64 {
     per_sample
 }
 
+/// Bytes of a float fragment.
+const FLOAT_FRAG: f64 = 24.0;
+
+/// Bytes of a fixed run ([`crate::stage::raster::Run`]).
+const RUN: f64 = std::mem::size_of::<crate::stage::raster::Run>() as f64;
+
+/// Sample rows (of `n` per pixel) a primitive's runs can take: one per row of its bounding
+/// box (two for a line, which is two triangles), at most one per fragment `f`.
+fn runs(p: &Primitive, f: f64, n: f64) -> f64 {
+    let [_, y0, _, y1] = bounds(p);
+    let per = if matches!(p, Primitive::Line { .. }) {
+        2.0
+    } else {
+        1.0
+    };
+    let rows = per * ((y1 - y0).max(0.0) + 2.0) * n;
+    if rows.is_finite() { f.min(rows) } else { f }
+}
+
+/// The fragments (float) and the runs (fixed) of every primitive of `host` on `plan`.
+fn fragments_and_runs(plan: &Plan, host: &HostScene) -> (f64, f64) {
+    let l = &plan.layout;
+    let (n, region_samples) = (l.grid.n as f64, l.samples.len() as f64);
+    host.prims.iter().fold((0.0, 0.0), |(f, r), p| {
+        let fp = fragments(p, n, region_samples);
+        (f + fp, r + runs(p, fp, n))
+    })
+}
+
 /// The sample side of a whole-region run: the sample buffers' and the fragment lists'
 /// bytes (what a banded run divides into bands; see `super::bands`).
 pub fn sample_side(plan: &Plan, host: &HostScene, opts: RunOptions) -> (f64, f64) {
-    let l = &plan.layout;
-    let region_samples = l.samples.len() as f64;
-    let frags: f64 = host
-        .prims
-        .iter()
-        .map(|p| fragments(p, l.grid.n as f64, region_samples))
-        .sum();
+    let region_samples = plan.layout.samples.len() as f64;
+    let (frags, runs) = fragments_and_runs(plan, host);
     (
         region_samples * per_sample(plan, opts),
-        frags * (12.0 + 24.0),
+        frags * FLOAT_FRAG + runs * RUN,
     )
 }
 
@@ -123,7 +148,7 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
             drivers,
         })
     };
-    let all_frags = sample_side(plan, host, opts).1 / (12.0 + 24.0);
+    let all_frags = fragments_and_runs(plan, host).0;
     match super::bands::rows(plan, opts) {
         None => {
             let (buffers, f) = sample_side(plan, host, opts);
@@ -154,7 +179,7 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
             );
             // The fragments of the band with the most: a primitive gives a band at most one
             // fragment per sample of its bounding box's rows in the band (two for a line,
-            // which is two triangles), and at most its whole area.
+            // which is two triangles), and at most its whole area; and a run per row.
             let all: Vec<(f64, [f64; 4], f64)> = host
                 .prims
                 .iter()
@@ -181,7 +206,8 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
                             if yb < y0 - 1.0 || ya > y1 + 1.0 {
                                 0.0
                             } else {
-                                f.min(per * (x1 - x0 + 2.0) * n * rows_in * n)
+                                let frags = f.min(per * (x1 - x0 + 2.0) * n * rows_in * n);
+                                frags * FLOAT_FRAG + frags.min(per * rows_in * n) * RUN
                             }
                         })
                         .sum::<f64>()
@@ -189,7 +215,7 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
                 .fold(0.0, f64::max);
             part(
                 "fragments (one band)",
-                frags * (12.0 + 24.0),
+                frags,
                 "the primitives' screen area in one band with overdraw and raster.samples",
             );
         }
@@ -231,7 +257,7 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
         let groups = f64::from(crate::truth::GROUPS);
         part(
             "depth-of-field truth",
-            batch * (l.grid.samples() as f64 * 20.0 + all_frags * 24.0)
+            batch * (l.grid.samples() as f64 * 20.0 + all_frags * FLOAT_FRAG)
                 + (groups + batch + 2.0) * pixels as f64 * 8.0,
             "--dof-truth: the threads, image.width x image.height and raster.samples",
         );
