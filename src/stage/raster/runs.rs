@@ -120,31 +120,62 @@ impl RunCodes {
         k
     }
 
-    /// Calls `f` with each fragment of `r`, in sample order: per sample, the codes of the
-    /// interpolators, then one add of each column step.
+    /// Calls `f` with each fragment of `r`, in sample order.
     #[inline(always)]
-    pub fn for_each(&self, r: &Run, mut f: impl FnMut(Frag)) {
-        let (mut z, mut i) = (r.z, r.i);
-        for j in 0..r.n {
-            let mut codes = [0u32; 3];
-            for c in 0..self.channels {
-                codes[c] = self.code(i[c], self.i_max[c]);
-                i[c] = i[c].wrapping_add(r.di[c]);
-            }
-            f(Frag {
-                s: r.s + j,
-                z: self.code(z, self.z_max),
-                i: codes,
-            });
-            z = z.wrapping_add(r.dz);
-        }
+    pub fn for_each(&self, r: &Run, f: impl FnMut(Frag)) {
+        self.frags(r).for_each(f);
     }
 
-    /// The fragments of `r`.
-    pub fn frags(&self, r: &Run) -> Vec<Frag> {
-        let mut out = Vec::with_capacity(r.n as usize);
-        self.for_each(r, |f| out.push(f));
-        out
+    /// The fragments of `r`, in sample order: per sample, the codes of the interpolators,
+    /// then one add of each column step.
+    #[inline(always)]
+    pub fn frags(&self, r: &Run) -> RunFrags<'_> {
+        RunFrags {
+            codes: self,
+            run: *r,
+            j: 0,
+        }
+    }
+}
+
+/// The fragments of a run, one by one ([`RunCodes::frags`]).
+pub struct RunFrags<'a> {
+    codes: &'a RunCodes,
+    /// The run, its values at sample `j`.
+    run: Run,
+    j: u32,
+}
+
+impl Iterator for RunFrags<'_> {
+    type Item = Frag;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Frag> {
+        if self.j == self.run.n {
+            return None;
+        }
+        let (c, r) = (self.codes, &mut self.run);
+        let mut codes = [0u32; 3];
+        let lanes = codes
+            .iter_mut()
+            .zip(r.i.iter_mut().zip(&r.di).zip(&c.i_max));
+        for (code, ((i, di), &max)) in lanes.take(c.channels) {
+            *code = c.code(*i, max);
+            *i = i.wrapping_add(*di);
+        }
+        let f = Frag {
+            s: r.s + self.j,
+            z: c.code(r.z, c.z_max),
+            i: codes,
+        };
+        r.z = r.z.wrapping_add(r.dz);
+        self.j += 1;
+        Some(f)
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = (self.run.n - self.j) as usize;
+        (n, Some(n))
     }
 }
 
@@ -236,7 +267,7 @@ mod tests {
                 zv += dz;
             }
             prop_assert_eq!(c.clamped(&r), want);
-            let got: Vec<_> = c.frags(&r).iter().map(|f| (f.s, f.z, f.i)).collect();
+            let got: Vec<_> = c.frags(&r).map(|f| (f.s, f.z, f.i)).collect();
             prop_assert_eq!(got, frags);
         }
     }

@@ -25,6 +25,10 @@ mod resolve;
 pub use float::{SamplesF, float_samples, point_visible_f64, resolve_f64};
 pub use resolve::resolve;
 
+/// Samples per task of the copies of the depth and id planes for a colour render's
+/// channels 1.. (256 KiB).
+const COPY_CHUNK: usize = 1 << 16;
+
 /// Primitive id of the background (samples no surface covered).
 pub const BACKGROUND: u32 = 0;
 
@@ -404,13 +408,21 @@ impl Stage for Visibility {
                 coding: SampleCoding::Linear,
             })
         };
-        // Channels 1.. share the depth and the winning primitive of every sample.
+        // Channels 1.. share the depth and the winning primitive of every sample: copies,
+        // in chunks on the threads.
+        let copy = |src: &[u32]| {
+            let mut v = cx.pool.scratch(src.len(), 0);
+            v.par_chunks_mut(COPY_CHUNK)
+                .zip(src.par_chunks(COPY_CHUNK))
+                .for_each(|(d, s)| d.copy_from_slice(s));
+            v
+        };
         let more: Vec<Samples> = extra
             .into_iter()
             .map(|i| Samples {
                 reg,
-                z: cx.pool.copy(&buf.z),
-                prim: cx.pool.copy(&buf.prim),
+                z: copy(&buf.z),
+                prim: copy(&buf.prim),
                 i,
             })
             .collect();

@@ -1,9 +1,11 @@
 //! The depth test of a surface's runs ([`crate::stage::raster::runs`]) into a part of the
-//! sample buffer. A grey run whose values stay in range (checked at its two ends: the
-//! roundings are monotonic, the values linear) takes a kernel with no clamp, no overflow
-//! check and no branch per sample, which the compiler vectorises (AVX2 where the CPU has
-//! it); every other run takes the raster's own per-sample codes. Both give the same tests,
-//! writes and codes, sample by sample (`tests::fast_runs_match_the_codes_one_by_one`).
+//! sample buffer. A run whose values stay in range (checked at its two ends: the roundings
+//! are monotonic, the values linear) takes a kernel with no clamp and no overflow check: a
+//! grey run's has no branch per sample either, and the compiler vectorises it (AVX2 where
+//! the CPU has it); a colour run's rounds the three intensities only where the test
+//! passes. Every other run takes the raster's own per-sample codes. All give the same
+//! tests, writes and codes, sample by sample (`tests::fast_runs_match_the_codes_one_by_one`,
+//! `tests::colour_runs_match_the_codes_one_by_one`).
 
 use super::{Part, VisWork, ZConvert};
 use crate::fixed::RoundShift;
@@ -32,8 +34,15 @@ pub fn resolve(
             &mut part.prim[at..at + n],
             &mut part.i[at..at + n],
         );
+        if let [e1, e2] = &mut part.extra[..]
+            && let Some(k) = Kernel::of(r, codes, zc, 3)
+        {
+            let more = (&mut e1[at..at + n], &mut e2[at..at + n]);
+            writes += rgb(&k, prim, (z_buf, prim_buf, i_buf), more);
+            continue;
+        }
         if part.extra.is_empty() {
-            if let Some(k) = Kernel::of(r, codes, zc) {
+            if let Some(k) = Kernel::of(r, codes, zc, 1) {
                 writes += if avx2 {
                     simd::grey_avx2(&k, prim, (z_buf, prim_buf, i_buf))
                 } else {
@@ -76,36 +85,51 @@ pub fn resolve(
     w.clamped += clamped;
 }
 
-/// A grey run whose every value rounds into range with no overflow: its start values,
-/// steps and the two roundings of depth (the raster's, then the z-buffer's).
+/// A run whose every value rounds into range with no overflow: its start values, steps
+/// and the two roundings of depth (the raster's, then the z-buffer's).
 struct Kernel {
     z: i64,
     dz: i64,
-    i: i64,
-    di: i64,
+    i: [i64; 3],
+    di: [i64; 3],
     raster: RoundShift,
     zbuf: RoundShift,
 }
 
 impl Kernel {
     /// The kernel of `r`, if its end values show that no value of it clamps or overflows.
-    fn of(r: &Run, codes: &RunCodes, zc: &ZConvert) -> Option<Self> {
+    /// The kernel of `r` with `channels` intensities, if its end values show that no value
+    /// of it clamps or overflows.
+    fn of(r: &Run, codes: &RunCodes, zc: &ZConvert, channels: usize) -> Option<Self> {
         let last = i64::from(r.n) - 1;
         let end = |v: i64, d: i64| d.checked_mul(last).and_then(|x| x.checked_add(v));
-        let (ez, ei) = (end(r.z, r.dz)?, end(r.i[0], r.di[0])?);
         let raster = codes.rounding();
-        let small = [r.z, ez, r.i[0], ei].into_iter().all(RoundShift::is_small);
+        let ez = end(r.z, r.dz)?;
         let z_ok = |v: i64| {
             let c = raster.apply_small(v);
             // The raster's depth code unclamped, and the z-buffer's code of it in range.
-            c >= 0 && c <= codes.z_max() && zc.round.apply(c) <= i64::from(zc.max)
+            RoundShift::is_small(v)
+                && c >= 0
+                && c <= codes.z_max()
+                && zc.round.apply(c) <= i64::from(zc.max)
         };
-        let i_ok = |v: i64| (0..=codes.i_max(0)).contains(&raster.apply_small(v));
-        (small && z_ok(r.z) && z_ok(ez) && i_ok(r.i[0]) && i_ok(ei)).then_some(Self {
+        if !(z_ok(r.z) && z_ok(ez)) {
+            return None;
+        }
+        for c in 0..channels {
+            let ei = end(r.i[c], r.di[c])?;
+            let i_ok = |v: i64| {
+                RoundShift::is_small(v) && (0..=codes.i_max(c)).contains(&raster.apply_small(v))
+            };
+            if !(i_ok(r.i[c]) && i_ok(ei)) {
+                return None;
+            }
+        }
+        Some(Self {
             z: r.z,
             dz: r.dz,
-            i: r.i[0],
-            di: r.di[0],
+            i: r.i,
+            di: r.di,
             raster,
             zbuf: zc.round,
         })
@@ -116,7 +140,7 @@ impl Kernel {
 /// of the run): branch-free selects. Returns the writes.
 #[inline(always)]
 fn grey(k: &Kernel, prim: u32, (zb, pb, ib): (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
-    let (mut z, mut i) = (k.z, k.i);
+    let (mut z, mut i) = (k.z, k.i[0]);
     let mut writes = 0;
     for ((zb, pb), ib) in zb.iter_mut().zip(pb.iter_mut()).zip(ib.iter_mut()) {
         let zv = k.zbuf.apply_small(k.raster.apply_small(z)) as u32;
@@ -127,10 +151,38 @@ fn grey(k: &Kernel, prim: u32, (zb, pb, ib): (&mut [u32], &mut [u32], &mut [u32]
         *ib = if win { iv } else { *ib };
         writes += u64::from(win);
         z = z.wrapping_add(k.dz);
-        i = i.wrapping_add(k.di);
+        i = i.wrapping_add(k.di[0]);
     }
     writes
 }
+
+/// [`grey`] for a colour run: channel 0's intensity into `ib`, channels 1 and 2's into
+/// `e1` and `e2`.
+fn rgb(k: &Kernel, prim: u32, (zb, pb, ib): Planes, (e1, e2): (&mut [u32], &mut [u32])) -> u64 {
+    let (mut z, mut i) = (k.z, k.i);
+    let mut writes = 0;
+    let planes = zb.iter_mut().zip(pb.iter_mut()).zip(ib.iter_mut());
+    for (((zb, pb), ib), (a, b)) in planes.zip(e1.iter_mut().zip(e2.iter_mut())) {
+        let zv = k.zbuf.apply_small(k.raster.apply_small(z)) as u32;
+        let win = zv < *zb;
+        if win {
+            *zb = zv;
+            *pb = prim;
+            *ib = k.raster.apply_small(i[0]) as u32;
+            *a = k.raster.apply_small(i[1]) as u32;
+            *b = k.raster.apply_small(i[2]) as u32;
+            writes += 1;
+        }
+        z = z.wrapping_add(k.dz);
+        for (v, d) in i.iter_mut().zip(&k.di) {
+            *v = v.wrapping_add(*d);
+        }
+    }
+    writes
+}
+
+/// A run's slices of the depth, primitive-id and channel-0 intensity planes.
+type Planes<'a> = (&'a mut [u32], &'a mut [u32], &'a mut [u32]);
 
 #[cfg(target_arch = "x86_64")]
 mod simd {
@@ -178,6 +230,10 @@ mod tests {
     use proptest::prelude::*;
 
     fn setup(guard: u32, q: usize, zs: u32) -> (RunCodes, ZConvert) {
+        setup_channels(guard, q, zs, 1)
+    }
+
+    fn setup_channels(guard: u32, q: usize, zs: u32, channels: usize) -> (RunCodes, ZConvert) {
         let quant = Quant::ALL[q];
         let codes = RunCodes::new(&RasterParams {
             grid: Grid::new(4, 4, 8, 8),
@@ -185,7 +241,7 @@ mod tests {
             quant,
             i_max: [4095; 3],
             z_max: (1 << 24) - 1,
-            channels: 1,
+            channels,
         });
         let zc = ZConvert {
             round: RoundShift::new(zs, quant),
@@ -230,7 +286,7 @@ mod tests {
             prop_assert_eq!(&p_got, &p_want);
             prop_assert_eq!(&i_got, &i_want);
             // Both builds of the kernel, where it applies.
-            if let Some(k) = Kernel::of(&r, &codes, &zc) {
+            if let Some(k) = Kernel::of(&r, &codes, &zc, 1) {
                 for avx2 in [false, true] {
                     if avx2 && !simd::avx2() {
                         continue;
@@ -246,6 +302,47 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// Every colour run, fast kernel or not, writes the three channels' codes of the
+        /// samples whose depth test passes, as the raster's per-sample codes do.
+        #[test]
+        fn colour_runs_match_the_codes_one_by_one(
+            guard in 8u32..=24,
+            q in 0usize..7,
+            zs in 0u32..8,
+            (z, dz) in (0i64..(1i64 << 44), -(1i64 << 30)..(1i64 << 30)),
+            i in prop::array::uniform3(-(1i64 << 10)..(1i64 << 36)),
+            di in prop::array::uniform3(-(1i64 << 26)..(1i64 << 26)),
+            n in 1u32..40,
+            old in prop::collection::vec(0u32..(1 << 20), 43),
+        ) {
+            let (codes, zc) = setup_channels(guard, q, zs, 3);
+            let r = Run { s: 3, n, z, dz, i, di };
+            let len = 3 + n as usize;
+            let mut want = [old[..len].to_vec(), vec![9; len], vec![7; len], vec![6; len], vec![5; len]];
+            let (mut writes, mut clamped) = (0u64, 0u64);
+            codes.for_each(&r, |f| {
+                let zv = zc.apply(f.z, &mut clamped);
+                let s = f.s as usize;
+                if zv < want[0][s] {
+                    want[0][s] = zv;
+                    want[1][s] = 5;
+                    for c in 0..3 {
+                        want[2 + c][s] = f.i[c];
+                    }
+                    writes += 1;
+                }
+            });
+            let mut got = [old[..len].to_vec(), vec![9; len], vec![7; len], vec![6; len], vec![5; len]];
+            let [gz, gp, gi, e1, e2] = &mut got;
+            let mut part = Part { s0: 0, z: gz, prim: gp, i: gi, extra: vec![&mut e1[..], &mut e2[..]] };
+            let mut w = VisWork::default();
+            resolve(&[r], &codes, 5, &zc, &mut part, &mut w);
+            prop_assert_eq!((w.tests, w.writes, w.clamped), (u64::from(n), writes, clamped));
+            prop_assert_eq!(got, want);
+        }
+    }
+
     /// The generated runs reach the fast kernel (the property above is not vacuous).
     #[test]
     fn in_range_runs_take_the_kernel() {
@@ -258,8 +355,20 @@ mod tests {
             i: [200 << 14, 0, 0],
             di: [1 << 12, 0, 0],
         };
-        assert!(Kernel::of(&r, &codes, &zc).is_some());
+        assert!(Kernel::of(&r, &codes, &zc, 1).is_some());
         let out = Run { z: -(1 << 20), ..r };
-        assert!(Kernel::of(&out, &codes, &zc).is_none());
+        assert!(Kernel::of(&out, &codes, &zc, 1).is_none());
+        let (codes, zc) = setup_channels(14, 2, 4, 3);
+        let rgb = Run {
+            i: [200 << 14, 100 << 14, 50 << 14],
+            di: [1 << 12; 3],
+            ..r
+        };
+        assert!(Kernel::of(&rgb, &codes, &zc, 3).is_some());
+        let dark = Run {
+            i: [200 << 14, -(1 << 20), 50 << 14],
+            ..rgb
+        };
+        assert!(Kernel::of(&dark, &codes, &zc, 3).is_none());
     }
 }
