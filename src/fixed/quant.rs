@@ -123,15 +123,20 @@ impl RoundShift {
     /// check, so a loop over such values vectorises.
     #[inline(always)]
     pub fn apply_small(&self, raw: i64) -> i64 {
-        let bias = if raw < 0 { self.neg } else { self.pos } + ((raw >> self.shift) & self.conv);
-        raw.wrapping_add(bias) >> self.shift
+        raw.wrapping_add(self.bias(raw)) >> self.shift
+    }
+
+    /// The bias added to `raw` before the shift.
+    #[inline(always)]
+    fn bias(&self, raw: i64) -> i64 {
+        let sign = if raw < 0 { self.neg } else { self.pos };
+        sign + ((raw >> self.shift) & self.conv)
     }
 
     /// `raw * 2^-shift` rounded.
     #[inline(always)]
     pub fn apply(&self, raw: i64) -> i64 {
-        let bias = if raw < 0 { self.neg } else { self.pos } + ((raw >> self.shift) & self.conv);
-        match raw.checked_add(bias) {
+        match raw.checked_add(self.bias(raw)) {
             Some(v) => v >> self.shift,
             None => round_shift(i128::from(raw), self.shift, self.q) as i64,
         }

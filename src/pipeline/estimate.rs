@@ -83,16 +83,20 @@ const FLOAT_FRAG: f64 = 24.0;
 /// Bytes of a fixed run ([`crate::stage::raster::Run`]).
 const RUN: f64 = std::mem::size_of::<crate::stage::raster::Run>() as f64;
 
+/// The triangles the raster walks for a primitive: two for a line, one otherwise.
+fn triangles(p: &Primitive) -> f64 {
+    if matches!(p, Primitive::Line { .. }) {
+        2.0
+    } else {
+        1.0
+    }
+}
+
 /// Sample rows (of `n` per pixel) a primitive's runs can take: one per row of its bounding
 /// box (two for a line, which is two triangles), at most one per fragment `f`.
 fn runs(p: &Primitive, f: f64, n: f64) -> f64 {
     let [_, y0, _, y1] = bounds(p);
-    let per = if matches!(p, Primitive::Line { .. }) {
-        2.0
-    } else {
-        1.0
-    };
-    let rows = per * ((y1 - y0).max(0.0) + 2.0) * n;
+    let rows = triangles(p) * ((y1 - y0).max(0.0) + 2.0) * n;
     if rows.is_finite() { f.min(rows) } else { f }
 }
 
@@ -184,12 +188,8 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
                 .prims
                 .iter()
                 .map(|p| {
-                    let per = if matches!(p, Primitive::Line { .. }) {
-                        2.0
-                    } else {
-                        1.0
-                    };
-                    (fragments(p, n, l.samples.len() as f64), bounds(p), per)
+                    let f = fragments(p, n, l.samples.len() as f64);
+                    (f, bounds(p), triangles(p))
                 })
                 .collect();
             let h = f64::from(l.grid.height);

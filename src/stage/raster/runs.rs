@@ -69,30 +69,22 @@ impl RunCodes {
         self.rs.apply(v).clamp(0, max) as u32
     }
 
-    /// The depth code of interpolator value `v`.
-    #[inline(always)]
-    pub fn z_code(&self, v: i64) -> u32 {
-        self.code(v, self.z_max)
-    }
-
-    /// Channel `c`'s intensity code of interpolator value `v`.
-    #[inline(always)]
-    pub fn i_code(&self, v: i64, c: usize) -> u32 {
-        self.code(v, self.i_max[c])
-    }
-
     fn out_of_range(&self, v: i64, max: i64) -> bool {
         let c = self.rs.apply(v);
         c < 0 || c > max
     }
 
+    /// The last of the values `v`, `v + d`, ... (`n` of them), if no sum leaves `i64`.
+    #[inline]
+    pub fn end(v: i64, d: i64, n: u32) -> Option<i64> {
+        d.checked_mul(i64::from(n) - 1)
+            .and_then(|x| x.checked_add(v))
+    }
+
     /// The values `v`, `v + d`, ... (`n` of them) that round out of `0..=max`.
     #[inline]
     fn lane_clamped(&self, v: i64, d: i64, n: u32, max: i64) -> u64 {
-        let end = d
-            .checked_mul(i64::from(n) - 1)
-            .and_then(|x| x.checked_add(v));
-        match end {
+        match Self::end(v, d, n) {
             Some(e) if !self.out_of_range(v, max) && !self.out_of_range(e, max) => 0,
             _ => self.count_clamped(v, d, n, max),
         }

@@ -41,27 +41,14 @@ pub fn resolve(
             writes += rgb(&k, prim, (z_buf, prim_buf, i_buf), more);
             continue;
         }
-        if part.extra.is_empty() {
-            if let Some(k) = Kernel::of(r, codes, zc, 1) {
-                writes += if avx2 {
-                    simd::grey_avx2(&k, prim, (z_buf, prim_buf, i_buf))
-                } else {
-                    grey(&k, prim, (z_buf, prim_buf, i_buf))
-                };
-                continue;
-            }
-            let (mut z, mut i) = (r.z, r.i[0]);
-            for ((zb, pb), ib) in z_buf.iter_mut().zip(prim_buf.iter_mut()).zip(i_buf) {
-                let zv = zc.apply(codes.z_code(z), &mut clamped);
-                if zv < *zb {
-                    *zb = zv;
-                    *pb = prim;
-                    *ib = codes.i_code(i, 0);
-                    writes += 1;
-                }
-                z = z.wrapping_add(r.dz);
-                i = i.wrapping_add(r.di[0]);
-            }
+        if part.extra.is_empty()
+            && let Some(k) = Kernel::of(r, codes, zc, 1)
+        {
+            writes += if avx2 {
+                simd::grey_avx2(&k, prim, (z_buf, prim_buf, i_buf))
+            } else {
+                grey(&k, prim, (z_buf, prim_buf, i_buf))
+            };
             continue;
         }
         let extra = &mut part.extra;
@@ -101,10 +88,8 @@ impl Kernel {
     /// The kernel of `r` with `channels` intensities, if its end values show that no value
     /// of it clamps or overflows.
     fn of(r: &Run, codes: &RunCodes, zc: &ZConvert, channels: usize) -> Option<Self> {
-        let last = i64::from(r.n) - 1;
-        let end = |v: i64, d: i64| d.checked_mul(last).and_then(|x| x.checked_add(v));
         let raster = codes.rounding();
-        let ez = end(r.z, r.dz)?;
+        let ez = RunCodes::end(r.z, r.dz, r.n)?;
         let z_ok = |v: i64| {
             let c = raster.apply_small(v);
             // The raster's depth code unclamped, and the z-buffer's code of it in range.
@@ -117,7 +102,7 @@ impl Kernel {
             return None;
         }
         for c in 0..channels {
-            let ei = end(r.i[c], r.di[c])?;
+            let ei = RunCodes::end(r.i[c], r.di[c], r.n)?;
             let i_ok = |v: i64| {
                 RoundShift::is_small(v) && (0..=codes.i_max(c)).contains(&raster.apply_small(v))
             };
@@ -229,11 +214,7 @@ mod tests {
     use crate::stage::visibility::{Part, VisWork, ZConvert};
     use proptest::prelude::*;
 
-    fn setup(guard: u32, q: usize, zs: u32) -> (RunCodes, ZConvert) {
-        setup_channels(guard, q, zs, 1)
-    }
-
-    fn setup_channels(guard: u32, q: usize, zs: u32, channels: usize) -> (RunCodes, ZConvert) {
+    fn setup(guard: u32, q: usize, zs: u32, channels: usize) -> (RunCodes, ZConvert) {
         let quant = Quant::ALL[q];
         let codes = RunCodes::new(&RasterParams {
             grid: Grid::new(4, 4, 8, 8),
@@ -250,121 +231,180 @@ mod tests {
         (codes, zc)
     }
 
+    /// Planes depth, id, intensity and channels 1 and 2 of a run at sample 3 (three samples
+    /// before it), the depths from `old`.
+    fn planes(old: &[u32], r: &Run) -> [Vec<u32>; 5] {
+        let len = 3 + r.n as usize;
+        [
+            old[..len].to_vec(),
+            vec![9; len],
+            vec![7; len],
+            vec![6; len],
+            vec![5; len],
+        ]
+    }
+
+    /// Resolves `r` (surface 5, `channels` intensities) and checks the planes, tests,
+    /// writes and clamps against the raster's per-sample codes; returns the planes and the
+    /// writes.
+    fn check(
+        codes: &RunCodes,
+        zc: &ZConvert,
+        r: &Run,
+        old: &[u32],
+        channels: usize,
+    ) -> ([Vec<u32>; 5], u64) {
+        let mut want = planes(old, r);
+        let (mut writes, mut clamped) = (0u64, 0u64);
+        codes.for_each(r, |f| {
+            let zv = zc.apply(f.z, &mut clamped);
+            let s = f.s as usize;
+            if zv < want[0][s] {
+                (want[0][s], want[1][s]) = (zv, 5);
+                for c in 0..channels {
+                    want[2 + c][s] = f.i[c];
+                }
+                writes += 1;
+            }
+        });
+        let mut got = planes(old, r);
+        let [gz, gp, gi, e1, e2] = &mut got;
+        let extra = if channels == 3 {
+            vec![&mut e1[..], &mut e2[..]]
+        } else {
+            Vec::new()
+        };
+        let mut part = Part {
+            s0: 0,
+            z: gz,
+            prim: gp,
+            i: gi,
+            extra,
+        };
+        let mut w = VisWork::default();
+        resolve(&[*r], codes, 5, zc, &mut part, &mut w);
+        assert_eq!(
+            (w.tests, w.writes, w.clamped),
+            (u64::from(r.n), writes, clamped)
+        );
+        assert_eq!(got, want);
+        (want, writes)
+    }
+
+    /// Both builds of the grey kernel on `r`, against the planes `want` and `writes`.
+    fn check_kernel(
+        codes: &RunCodes,
+        zc: &ZConvert,
+        r: &Run,
+        old: &[u32],
+        (want, writes): ([Vec<u32>; 5], u64),
+    ) {
+        let Some(k) = Kernel::of(r, codes, zc, 1) else {
+            return;
+        };
+        let n = r.n as usize;
+        for avx2 in [false, simd::avx2()] {
+            let (mut zk, mut pk, mut ik) = (old[3..3 + n].to_vec(), vec![9u32; n], vec![7u32; n]);
+            let planes = (&mut zk[..], &mut pk[..], &mut ik[..]);
+            let wk = if avx2 {
+                simd::grey_avx2(&k, 5, planes)
+            } else {
+                grey(&k, 5, planes)
+            };
+            assert_eq!(wk, writes);
+            assert_eq!(
+                (&zk[..], &pk[..], &ik[..]),
+                (&want[0][3..], &want[1][3..], &want[2][3..])
+            );
+        }
+    }
+
+    fn run_strategy() -> impl Strategy<Value = (u32, usize, u32, Run, Vec<u32>)> {
+        (
+            0u32..=24,
+            0usize..7,
+            0u32..8,
+            (-(1i64 << 20)..(1i64 << 50), -(1i64 << 36)..(1i64 << 36)),
+            prop::array::uniform3(-(1i64 << 20)..(1i64 << 40)),
+            prop::array::uniform3(-(1i64 << 30)..(1i64 << 30)),
+            1u32..40,
+            prop::collection::vec(0u32..(1 << 20), 43),
+        )
+            .prop_map(|(guard, q, zs, (z, dz), i, di, n, old)| {
+                (
+                    guard,
+                    q,
+                    zs,
+                    Run {
+                        s: 3,
+                        n,
+                        z,
+                        dz,
+                        i,
+                        di,
+                    },
+                    old,
+                )
+            })
+    }
+
     proptest! {
         /// Every grey run, fast kernel (portable and AVX2) or not, depth-tests its samples
         /// as the raster's per-sample codes do: the same planes, writes and clamps.
         #[test]
-        fn fast_runs_match_the_codes_one_by_one(
-            guard in 0u32..=24,
-            q in 0usize..7,
-            zs in 0u32..8,
-            (z, dz) in (-(1i64 << 20)..(1i64 << 50), -(1i64 << 36)..(1i64 << 36)),
-            (i, di) in (-(1i64 << 20)..(1i64 << 40), -(1i64 << 30)..(1i64 << 30)),
-            n in 1u32..40,
-            old in prop::collection::vec(0u32..(1 << 20), 43),
-        ) {
-            let (codes, zc) = setup(guard, q, zs);
-            let r = Run { s: 3, n, z, dz, i: [i, 0, 0], di: [di, 0, 0] };
-            let len = 3 + n as usize;
-            // The reference: the raster's codes, one sample at a time.
-            let (mut z_want, mut p_want, mut i_want) = (old[..len].to_vec(), vec![9u32; len], vec![7u32; len]);
-            let (mut writes, mut clamped) = (0u64, 0u64);
-            codes.for_each(&r, |f| {
-                let zv = zc.apply(f.z, &mut clamped);
-                let s = f.s as usize;
-                if zv < z_want[s] {
-                    (z_want[s], p_want[s], i_want[s]) = (zv, 5, f.i[0]);
-                    writes += 1;
-                }
-            });
-            let (mut z_got, mut p_got, mut i_got) = (old[..len].to_vec(), vec![9u32; len], vec![7u32; len]);
-            let mut part = Part { s0: 0, z: &mut z_got, prim: &mut p_got, i: &mut i_got, extra: Vec::new() };
-            let mut w = VisWork::default();
-            resolve(&[r], &codes, 5, &zc, &mut part, &mut w);
-            prop_assert_eq!((w.tests, w.writes, w.clamped), (u64::from(n), writes, clamped));
-            prop_assert_eq!(&z_got, &z_want);
-            prop_assert_eq!(&p_got, &p_want);
-            prop_assert_eq!(&i_got, &i_want);
-            // Both builds of the kernel, where it applies.
-            if let Some(k) = Kernel::of(&r, &codes, &zc, 1) {
-                for avx2 in [false, true] {
-                    if avx2 && !simd::avx2() {
-                        continue;
-                    }
-                    let (mut zk, mut pk, mut ik) = (old[3..len].to_vec(), vec![9u32; n as usize], vec![7u32; n as usize]);
-                    let planes = (&mut zk[..], &mut pk[..], &mut ik[..]);
-                    let wk = if avx2 { simd::grey_avx2(&k, 5, planes) } else { grey(&k, 5, planes) };
-                    prop_assert_eq!(wk, writes);
-                    prop_assert_eq!(&zk[..], &z_want[3..]);
-                    prop_assert_eq!(&ik[..], &i_want[3..]);
-                }
-            }
+        fn fast_runs_match_the_codes_one_by_one((guard, q, zs, r, old) in run_strategy()) {
+            let (codes, zc) = setup(guard, q, zs, 1);
+            let got = check(&codes, &zc, &r, &old, 1);
+            check_kernel(&codes, &zc, &r, &old, got);
         }
-    }
 
-    proptest! {
         /// Every colour run, fast kernel or not, writes the three channels' codes of the
         /// samples whose depth test passes, as the raster's per-sample codes do.
         #[test]
-        fn colour_runs_match_the_codes_one_by_one(
-            guard in 8u32..=24,
-            q in 0usize..7,
-            zs in 0u32..8,
-            (z, dz) in (0i64..(1i64 << 44), -(1i64 << 30)..(1i64 << 30)),
-            i in prop::array::uniform3(-(1i64 << 10)..(1i64 << 36)),
-            di in prop::array::uniform3(-(1i64 << 26)..(1i64 << 26)),
-            n in 1u32..40,
-            old in prop::collection::vec(0u32..(1 << 20), 43),
-        ) {
-            let (codes, zc) = setup_channels(guard, q, zs, 3);
-            let r = Run { s: 3, n, z, dz, i, di };
-            let len = 3 + n as usize;
-            let mut want = [old[..len].to_vec(), vec![9; len], vec![7; len], vec![6; len], vec![5; len]];
-            let (mut writes, mut clamped) = (0u64, 0u64);
-            codes.for_each(&r, |f| {
-                let zv = zc.apply(f.z, &mut clamped);
-                let s = f.s as usize;
-                if zv < want[0][s] {
-                    want[0][s] = zv;
-                    want[1][s] = 5;
-                    for c in 0..3 {
-                        want[2 + c][s] = f.i[c];
-                    }
-                    writes += 1;
-                }
-            });
-            let mut got = [old[..len].to_vec(), vec![9; len], vec![7; len], vec![6; len], vec![5; len]];
-            let [gz, gp, gi, e1, e2] = &mut got;
-            let mut part = Part { s0: 0, z: gz, prim: gp, i: gi, extra: vec![&mut e1[..], &mut e2[..]] };
-            let mut w = VisWork::default();
-            resolve(&[r], &codes, 5, &zc, &mut part, &mut w);
-            prop_assert_eq!((w.tests, w.writes, w.clamped), (u64::from(n), writes, clamped));
-            prop_assert_eq!(got, want);
+        fn colour_runs_match_the_codes_one_by_one((guard, q, zs, r, old) in run_strategy()) {
+            let (codes, zc) = setup(guard, q, zs, 3);
+            check(&codes, &zc, &r, &old, 3);
         }
     }
 
-    /// The generated runs reach the fast kernel (the property above is not vacuous).
+    /// Runs in range take the kernels, and give the per-sample codes there (the
+    /// properties above need not draw such runs); a run out of range does not.
     #[test]
     fn in_range_runs_take_the_kernel() {
-        let (codes, zc) = setup(14, 2, 4);
+        let (codes, zc) = setup(14, 2, 4, 1);
         let r = Run {
-            s: 0,
+            s: 3,
             n: 16,
             z: 1000 << 14,
             dz: 3 << 10,
             i: [200 << 14, 0, 0],
             di: [1 << 12, 0, 0],
         };
+        // The samples already hold a nearer depth, the same depth (the earlier surface
+        // stays) or a farther one, in turn.
+        let mut old = vec![0u32; 43];
+        let mut ignored = 0;
+        for (j, f) in codes.frags(&r).enumerate() {
+            let zv = zc.apply(f.z, &mut ignored);
+            old[f.s as usize] = [0, zv, 1 << 20][j % 3];
+        }
         assert!(Kernel::of(&r, &codes, &zc, 1).is_some());
+        let got = check(&codes, &zc, &r, &old, 1);
+        assert_eq!(
+            got.1, 5,
+            "the farther samples 2, 5, 8, 11 and 14 are written"
+        );
+        check_kernel(&codes, &zc, &r, &old, got);
         let out = Run { z: -(1 << 20), ..r };
         assert!(Kernel::of(&out, &codes, &zc, 1).is_none());
-        let (codes, zc) = setup_channels(14, 2, 4, 3);
+        let (codes, zc) = setup(14, 2, 4, 3);
         let rgb = Run {
             i: [200 << 14, 100 << 14, 50 << 14],
             di: [1 << 12; 3],
             ..r
         };
         assert!(Kernel::of(&rgb, &codes, &zc, 3).is_some());
+        check(&codes, &zc, &rgb, &old, 3);
         let dark = Run {
             i: [200 << 14, -(1 << 20), 50 << 14],
             ..rgb
