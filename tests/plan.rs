@@ -129,8 +129,7 @@ fn an_8192_square_screen_is_accepted_in_bands_and_a_small_limit_still_refuses_it
             .any(|p| p.what == "sample buffers (one band)")
     );
     // The same screen with the whole region at once would need tens of GiB.
-    let (buffers, frags) =
-        pipeline::estimate::sample_side(&plan, &plan.host, RunOptions::default());
+    let (buffers, frags) = pipeline::estimate::sample_side(&plan, RunOptions::default());
     assert!(buffers + frags > (30u64 << 30) as f64);
     // A 1 GiB limit stands in for a small machine: refused before anything runs.
     let t = std::time::Instant::now();

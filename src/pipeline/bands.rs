@@ -53,7 +53,7 @@ pub fn rows(plan: &Plan, opts: RunOptions) -> Option<u32> {
     let r = match opts.band_rows {
         Some(r) => r.max(1).div_ceil(tile) * tile,
         None => {
-            let (buffers, frags) = super::estimate::sample_side(plan, &plan.host, opts);
+            let (buffers, frags) = super::estimate::sample_side(plan, opts);
             let bytes = buffers + frags;
             if bytes <= ONE_BAND_MAX as f64 {
                 return None;

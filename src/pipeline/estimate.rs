@@ -11,7 +11,7 @@
 
 use super::plan::Plan;
 use crate::scene::{HostScene, Primitive};
-use crate::stage::{RunOptions, StageId};
+use crate::stage::{Layout, RunOptions, StageId};
 use serde::Serialize;
 
 /// One part of the estimate.
@@ -100,48 +100,66 @@ fn runs(p: &Primitive, f: f64, n: f64) -> f64 {
     if rows.is_finite() { f.min(rows) } else { f }
 }
 
-/// The fragments (float) and the runs (fixed) of every primitive of `host` on `plan`.
-fn fragments_and_runs(plan: &Plan, host: &HostScene) -> (f64, f64) {
-    let l = &plan.layout;
-    let (n, region_samples) = (l.grid.n as f64, l.samples.len() as f64);
-    host.prims.iter().fold((0.0, 0.0), |(f, r), p| {
-        let fp = fragments(p, n, region_samples);
-        (f + fp, r + runs(p, fp, n))
-    })
+/// The fragments (float) and the runs (fixed) every primitive of a host scene can emit on a
+/// layout, summed ([`crate::pipeline::Plan::footprint`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Footprint {
+    /// Covered samples.
+    pub fragments: f64,
+    /// Runs of the fixed raster.
+    pub runs: f64,
+}
+
+impl Footprint {
+    /// The sums over `host`'s primitives on `l`.
+    pub fn of(l: &Layout, host: &HostScene) -> Self {
+        let (n, region_samples) = (l.grid.n as f64, l.samples.len() as f64);
+        host.prims.iter().fold(Self::default(), |s, p| {
+            let f = fragments(p, n, region_samples);
+            Self {
+                fragments: s.fragments + f,
+                runs: s.runs + runs(p, f, n),
+            }
+        })
+    }
 }
 
 /// The sample side of a whole-region run: the sample buffers' and the fragment lists'
 /// bytes (what a banded run divides into bands; see `super::bands`).
-pub fn sample_side(plan: &Plan, host: &HostScene, opts: RunOptions) -> (f64, f64) {
+pub fn sample_side(plan: &Plan, opts: RunOptions) -> (f64, f64) {
     let region_samples = plan.layout.samples.len() as f64;
-    let (frags, runs) = fragments_and_runs(plan, host);
+    let f = plan.footprint;
     (
         region_samples * per_sample(plan, opts),
-        frags * FLOAT_FRAG + runs * RUN,
+        f.fragments * FLOAT_FRAG + f.runs * RUN,
     )
 }
 
 /// A primitive's pixel bounding box `[x0, y0, x1, y1]` (lines and points with their
 /// width).
 fn bounds(p: &Primitive) -> [f64; 4] {
-    let (pts, r): (Vec<(f64, f64)>, f64) = match p {
-        Primitive::Triangle(v) => (v.iter().map(|v| (v.x, v.y)).collect(), 0.0),
-        Primitive::Line { a, b, width } => (vec![(a.x, a.y), (b.x, b.y)], width / 2.0),
-        Primitive::Point { v, size } => (vec![(v.x, v.y)], size / 2.0 + 1.0),
+    let box_of = |pts: &[(f64, f64)], r: f64| {
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for &(x, y) in pts {
+            b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
+        }
+        [b[0] - r, b[1] - r, b[2] + r, b[3] + r]
     };
-    let f = |g: fn(f64, f64) -> f64, init: f64, xy: fn(&(f64, f64)) -> f64| {
-        pts.iter().map(xy).fold(init, g)
-    };
-    [
-        f(f64::min, f64::INFINITY, |p| p.0) - r,
-        f(f64::min, f64::INFINITY, |p| p.1) - r,
-        f(f64::max, f64::NEG_INFINITY, |p| p.0) + r,
-        f(f64::max, f64::NEG_INFINITY, |p| p.1) + r,
-    ]
+    match p {
+        Primitive::Triangle(v) => box_of(&v.map(|v| (v.x, v.y)), 0.0),
+        Primitive::Line { a, b, width } => box_of(&[(a.x, a.y), (b.x, b.y)], width / 2.0),
+        Primitive::Point { v, size } => box_of(&[(v.x, v.y)], size / 2.0 + 1.0),
+    }
 }
 
 /// Estimates the memory a run of `plan` needs.
-pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
+pub fn estimate(plan: &Plan, opts: RunOptions) -> Estimate {
+    let host = &plan.host;
     let l = &plan.layout;
     let pixels = l.grid.pixels();
     let mut parts = Vec::new();
@@ -152,10 +170,10 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
             drivers,
         })
     };
-    let all_frags = fragments_and_runs(plan, host).0;
+    let all_frags = plan.footprint.fragments;
     match super::bands::rows(plan, opts) {
         None => {
-            let (buffers, f) = sample_side(plan, host, opts);
+            let (buffers, f) = sample_side(plan, opts);
             part(
                 "sample buffers",
                 buffers,
@@ -268,9 +286,14 @@ pub fn estimate(plan: &Plan, host: &HostScene, opts: RunOptions) -> Estimate {
     }
 }
 
-/// A safe default limit: half the machine's physical memory (`/proc/meminfo`), or 4 GiB
-/// where that cannot be read.
+/// A safe default limit: half the machine's physical memory (`/proc/meminfo`, read once
+/// per process), or 4 GiB where that cannot be read.
 pub fn default_limit() -> u64 {
+    static LIMIT: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    *LIMIT.get_or_init(read_limit)
+}
+
+fn read_limit() -> u64 {
     let total = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
         t.lines()
             .find_map(|l| l.strip_prefix("MemTotal:"))

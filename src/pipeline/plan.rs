@@ -51,6 +51,9 @@ pub struct Plan {
     pub host_ms: f64,
     /// Key of the plan's input (the scene), the root of every stage's key.
     pub key: u64,
+    /// What the memory estimate counts of the host's primitives on this layout, summed
+    /// once: their covered samples (float fragments) and the fixed raster's runs.
+    pub footprint: super::estimate::Footprint,
 }
 
 /// The guard band the host clips to, after checking that the coordinate format holds it.
@@ -181,17 +184,19 @@ pub fn build_in(scene: &Scene, hw: &HwConfig, pool: &Pool) -> Result<Plan> {
         .str(env!("CARGO_PKG_VERSION"))
         .str(&serde_json::to_string(scene).unwrap_or_default())
         .finish();
+    let layout = Layout {
+        grid,
+        region,
+        samples,
+        tiles,
+        order,
+        band: None,
+        channels: channels(scene, hw),
+    };
     Ok(Plan {
         decisions,
-        layout: Layout {
-            grid,
-            region,
-            samples,
-            tiles,
-            order,
-            band: None,
-            channels: channels(scene, hw),
-        },
+        footprint: super::estimate::Footprint::of(&layout, &host),
+        layout,
         host: Arc::new(host),
         host_ms,
         key,
@@ -255,7 +260,7 @@ pub struct TileReport {
 impl Plan {
     /// The memory estimate of running the plan with `opts`.
     pub fn memory(&self, opts: crate::stage::RunOptions) -> super::estimate::Estimate {
-        super::estimate::estimate(self, &self.host, opts)
+        super::estimate::estimate(self, opts)
     }
     /// The planned stages in run order.
     pub fn order(&self) -> &[StageId] {

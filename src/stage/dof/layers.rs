@@ -10,6 +10,7 @@ use crate::fixed::Quant;
 use crate::stage::Pool;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::OnceLock;
 
 /// Pixels per chunk of the layer index's parallel pass.
 const INDEX_CHUNK: usize = 1 << 14;
@@ -101,7 +102,16 @@ pub struct LayerPlan {
     pub skipped: Vec<u64>,
     /// What each layer's alpha is normalised by (`dof.alpha_norm`).
     pub alpha_norm: AlphaNorm,
+    /// The layers' boxes ([`layer_boxes`]) for the image size they were found for: the
+    /// fixed run and the cycle model's work and row stream of one frame read them.
+    pub(super) boxes: OnceLock<SizedBoxes>,
 }
+
+/// A box `(x0, y0, x1, y1)`, `x1` and `y1` exclusive.
+pub(super) type LayerBox = (usize, usize, usize, usize);
+
+/// Every layer's box and the image size `(w, h)` they were found for.
+pub(super) type SizedBoxes = ((usize, usize), Vec<Option<LayerBox>>);
 
 impl LayerPlan {
     /// How far a layer's box reaches past its pixels, in mask half-sizes: `M` for its
@@ -318,6 +328,7 @@ pub fn plan_layers_in(
         background,
         skipped: Vec::new(),
         alpha_norm: p.alpha_norm,
+        boxes: OnceLock::new(),
     })
 }
 
@@ -378,12 +389,19 @@ pub fn layer_work(plan: &LayerPlan, width: usize, height: usize) -> Vec<LayerWor
 
 /// The bounding box (x0, y0, x1, y1 exclusive) of every layer's input in one pass over the
 /// index image, widened by the layer's [`LayerPlan::margin`] and clipped (the whole image
-/// for the background's layer; `None` for a layer without pixels).
-pub(super) fn layer_boxes(
-    w: usize,
-    h: usize,
-    plan: &LayerPlan,
-) -> Vec<Option<(usize, usize, usize, usize)>> {
+/// for the background's layer; `None` for a layer without pixels). Found once per plan
+/// and image size.
+pub(super) fn layer_boxes(w: usize, h: usize, plan: &LayerPlan) -> Vec<Option<LayerBox>> {
+    let (size, boxes) = plan.boxes.get_or_init(|| ((w, h), find_boxes(w, h, plan)));
+    if *size == (w, h) {
+        boxes.clone()
+    } else {
+        find_boxes(w, h, plan)
+    }
+}
+
+/// [`layer_boxes`], found.
+fn find_boxes(w: usize, h: usize, plan: &LayerPlan) -> Vec<Option<LayerBox>> {
     let n = plan.layers.len();
     let mut b = vec![(usize::MAX, usize::MAX, 0usize, 0usize); n];
     // A row is taken in runs of one layer (most of a row is): a box grows once per run.
@@ -427,7 +445,7 @@ pub(super) fn layer_boxes(
 
 #[cfg(test)]
 mod tests {
-    use super::sort_descending;
+    use super::*;
     use proptest::prelude::*;
 
     proptest! {
@@ -440,6 +458,44 @@ mod tests {
             sort_descending(&mut keys, &mut tmp);
             prop_assert_eq!(keys, want);
         }
+    }
+
+    /// The boxes are found once per plan and image size: a second call gives the first
+    /// call's boxes, and another size finds its own.
+    #[test]
+    fn layer_boxes_are_kept_per_size() {
+        let layer = |m| Layer {
+            key_far: 0,
+            key_near: 0,
+            z_range: (0.0, 0.0),
+            z_mid: 0.0,
+            sigma: 0.0,
+            m,
+            pixels: 0,
+            coef: vec![],
+            coef_f: vec![],
+            disc: None,
+        };
+        // 6 x 4 pixels: layer 1 in columns 2..4 of rows 1..3, layer 0 elsewhere.
+        let (w, h) = (6, 4);
+        let index = (0..w * h)
+            .map(|i| u16::from((1..3).contains(&(i / w)) && (2..4).contains(&(i % w))))
+            .collect();
+        let plan = LayerPlan {
+            layers: vec![layer(0), layer(1)],
+            index,
+            background: Some(0),
+            skipped: vec![],
+            alpha_norm: AlphaNorm::Image,
+            boxes: OnceLock::new(),
+        };
+        let want = vec![Some((0, 0, 6, 4)), Some((1, 0, 5, 4))];
+        assert_eq!(layer_boxes(w, h, &plan), want);
+        assert_eq!(layer_boxes(w, h, &plan), want);
+        assert_eq!(plan.boxes.get(), Some(&((w, h), want)));
+        // Read as 4 x 6: layer 1 is in columns 0..4 of rows 2..6, the box one wider.
+        assert_eq!(layer_boxes(4, 6, &plan), find_boxes(4, 6, &plan));
+        assert_ne!(find_boxes(4, 6, &plan), find_boxes(w, h, &plan));
     }
 
     #[test]
