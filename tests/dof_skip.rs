@@ -213,28 +213,44 @@ proptest! {
     }
 }
 
+/// The value 1234 on the background everywhere: value, depth and coverage planes.
+fn flat(w: usize, h: usize) -> (Vec<u32>, Vec<u32>, Vec<u16>) {
+    (
+        vec![1234u32; w * h],
+        vec![u32::MAX; w * h],
+        vec![0u16; w * h],
+    )
+}
+
+/// The image of `flat` planes and its layer plan.
+fn flat_image<'a>(
+    w: usize,
+    h: usize,
+    (v, k, c): &'a (Vec<u32>, Vec<u32>, Vec<u16>),
+    p: &DofCfg,
+) -> (DepthImage<'a, u32>, LayerPlan) {
+    let plan = plan_layers(k, c, 16, &lens(), p).unwrap();
+    let img = DepthImage {
+        width: w,
+        height: h,
+        value: v,
+        key: k,
+        cov: c,
+        n2: 16,
+    };
+    (img, plan)
+}
+
 /// A flat image larger than a tile: every tile is skipped with the option, the output is
 /// the value, and the border pixels (renormalised by the in-image tap sums) are exact too.
 #[test]
 fn flat_image_is_its_value() {
     let (w, h) = (40, 23);
-    let (v, k, c) = (
-        vec![1234u32; w * h],
-        vec![u32::MAX; w * h],
-        vec![0u16; w * h],
-    );
+    let planes = flat(w, h);
     let mut p = HwConfig::default_config().dof;
     p.skip_uniform_tiles = true;
-    let plan = plan_layers(&k, &c, 16, &lens(), &p).unwrap();
+    let (img, plan) = flat_image(w, h, &planes, &p);
     assert!(plan.layers[0].m > 0);
-    let img = DepthImage {
-        width: w,
-        height: h,
-        value: &v,
-        key: &k,
-        cov: &c,
-        n2: 16,
-    };
     let tiles = check(&img, &plan, &p, FRAME).unwrap();
     assert_eq!(tiles, 3 * 2);
     let (out, work, skipped) = layered_fixed_exec(
@@ -250,4 +266,22 @@ fn flat_image_is_its_value() {
     assert!(out.iter().all(|&o| o == 1234));
     assert_eq!((work.macs, work.divides), (0, 0));
     assert_eq!(skipped, vec![(w * h) as u64]);
+}
+
+/// A flat image whose horizontal sums fit the line word while its vertical sums overflow
+/// the accumulator: its uniform windows are not taken as the value, they saturate as the
+/// full datapath does.
+#[test]
+fn flat_image_saturates_the_accumulator() {
+    let (w, h) = (40, 23);
+    let planes = flat(w, h);
+    let mut p = HwConfig::default_config().dof;
+    p.acc_bits = p.line_bits;
+    let (img, plan) = flat_image(w, h, &planes, &p);
+    // 1234 x 16 x 2^12 fits 28 bits; times 2^12 again it does not.
+    assert_eq!((p.line_bits, p.coef_bits), (28, 12));
+    check(&img, &plan, &p, FRAME);
+    let (out, work) = igemu::stage::dof::layered_fixed(&img, &plan, &p, FRAME).unwrap();
+    assert_eq!(work.acc_overflows, (w * h) as u64);
+    assert!(out.iter().all(|&o| o < 1234));
 }

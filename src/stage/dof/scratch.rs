@@ -124,20 +124,24 @@ impl<P: Plane> Scratch<P> {
         l: usize,
         (x0, y0, bw, bh): (usize, usize, usize, usize),
     ) {
-        self.xi.clear();
-        self.ai.clear();
-        self.di.clear();
-        self.val.clear();
-        for y in y0..y0 + bh {
+        let n = bw * bh;
+        self.xi.resize(n, P::default());
+        self.ai.resize(n, P::default());
+        self.di.resize(n, P::default());
+        self.val.resize(n, 0);
+        for (yy, y) in (y0..y0 + bh).enumerate() {
             let r = y * img.width + x0..y * img.width + x0 + bw;
             let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
             let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
+            let o = yy * bw..(yy + 1) * bw;
+            let (xi, ai) = (&mut self.xi[o.clone()], &mut self.ai[o.clone()]);
+            let (di, val) = (&mut self.di[o.clone()], &mut self.val[o]);
+            val.copy_from_slice(value);
             for x in 0..bw {
                 let (s, d) = share(plan, key[x], cov[x], idx[x], l, img.n2);
-                self.xi.push(P::put(u64::from(value[x]) * u64::from(s)));
-                self.ai.push(P::put(u64::from(s)));
-                self.di.push(P::put(u64::from(d)));
-                self.val.push(value[x]);
+                xi[x] = P::put(u64::from(value[x]) * u64::from(s));
+                ai[x] = P::put(u64::from(s));
+                di[x] = P::put(u64::from(d));
             }
         }
     }

@@ -159,18 +159,26 @@ pub(super) fn run_strip<P: Plane>(
     s.full.clear();
     s.full.extend(ai.iter().map(|&a| a.get() == n2));
     s.win.compute(bw, eh, m, &s.full, val);
-    let u = &mut s.win.u;
-    for yy in 0..eh {
+    // `h <= line_max && h * bsy <= acc_max` is `h <= lim`, the row's limit.
+    for (yy, (u, xi)) in s
+        .win
+        .u
+        .chunks_exact_mut(bw)
+        .zip(xi.chunks_exact(bw))
+        .enumerate()
+    {
         let y = e0 + yy;
-        for x in 0..bw {
-            let i = yy * bw + x;
-            if u[i] {
-                let hxv = xi[i].get() as u128 * bsx[x] as u128;
-                u[i] = hxv <= line_max
-                    && hxv * bsy[y] as u128 <= acc_max
-                    && bsx[x] == wx[x + x0]
-                    && bsy[y] == wy[y + y0];
-            }
+        if bsy[y] != wy[y + y0] {
+            u.fill(false);
+            continue;
+        }
+        let lim = match bsy[y] {
+            0 => line_max,
+            b => line_max.min(acc_max / b as u128),
+        };
+        let cols = bsx.iter().zip(&wx[x0..x0 + bw]);
+        for ((u, xi), (&bx, &wxx)) in u.iter_mut().zip(xi).zip(cols) {
+            *u &= bx == wxx && xi.get() as u128 * bx as u128 <= lim;
         }
     }
     let (u, hu) = (&s.win.u[..], &s.win.hu[..]);
