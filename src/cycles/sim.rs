@@ -119,8 +119,13 @@ struct Sim {
     next: usize,
     /// Service cycles of the current token still to come.
     remaining: u64,
-    /// Countdowns of the tokens in the stage's pipeline (front: the oldest).
-    pipe: VecDeque<u32>,
+    /// The tokens in the stage's pipeline (front: the oldest), each as the value of
+    /// `clock` at which its countdown reaches 0.
+    pipe: VecDeque<u64>,
+    /// The stage's pipeline clock: cycles in which its countdowns ran (every cycle but the
+    /// frozen ones), so that a token's countdown is its entry less `clock`, and running
+    /// every countdown is one add.
+    clock: u64,
     latency: u32,
     /// FIFO to the next stage: occupancy and depth (`None` for a sink).
     occ: u32,
@@ -153,7 +158,7 @@ impl Sim {
         match state {
             // Waiting for line-buffer space: only the reader's action ends it; the pipeline
             // drains meanwhile.
-            State::Stalled if self.blocked => self.pipe.front().map_or(u64::MAX, |&c| c as u64),
+            State::Stalled if self.blocked => self.head(),
             // Frozen until the next stage takes a token (its own action).
             State::Stalled => match self.depth {
                 Some(d) if self.occ >= d => u64::MAX,
@@ -161,7 +166,7 @@ impl Sim {
             },
             _ => {
                 // The pipeline's head leaves (or stalls) in the cycle after it reaches 0.
-                let head = self.pipe.front().map_or(u64::MAX, |&c| c as u64);
+                let head = self.head();
                 if state == State::Busy {
                     // The last service cycle puts the token into the pipeline.
                     head.min(self.remaining.saturating_sub(1))
@@ -182,11 +187,13 @@ impl Sim {
         if state == State::Busy {
             self.remaining -= n;
         }
-        // n <= the head's countdown <= every countdown, and n fits the countdowns.
-        let n = n as u32;
-        for c in self.pipe.iter_mut() {
-            *c -= n;
-        }
+        // n <= the head's countdown <= every countdown.
+        self.clock += n;
+    }
+
+    /// The countdown of the pipeline's head (`u64::MAX`: empty).
+    fn head(&self) -> u64 {
+        self.pipe.front().map_or(u64::MAX, |&c| c - self.clock)
     }
 }
 
@@ -201,7 +208,7 @@ fn clock(sims: &mut [Sim], states: &mut [State]) {
         // Leave the pipeline into the FIFO (or the sink).
         let s = &mut sims[i];
         s.blocked = false;
-        if s.pipe.front() == Some(&0) {
+        if s.pipe.front() == Some(&s.clock) {
             match s.depth {
                 Some(d) if s.occ >= d => {
                     states[i] = State::Stalled;
@@ -217,9 +224,8 @@ fn clock(sims: &mut [Sim], states: &mut [State]) {
             }
             s.out += 1;
         }
-        for r in s.pipe.iter_mut() {
-            *r = r.saturating_sub(1);
-        }
+        // Every countdown runs (none is 0 behind the head: each entered in its own cycle).
+        s.clock += 1;
         let state = if s.remaining > 0 {
             s.remaining -= 1;
             State::Busy
@@ -259,7 +265,7 @@ fn clock(sims: &mut [Sim], states: &mut [State]) {
         };
         let s = &mut sims[i];
         if state == State::Busy && s.remaining == 0 {
-            s.pipe.push_back(s.latency);
+            s.pipe.push_back(s.clock + u64::from(s.latency));
         }
         states[i] = state;
     }
@@ -281,6 +287,7 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
                 next: 0,
                 remaining: 0,
                 pipe: VecDeque::new(),
+                clock: 0,
                 latency: w.stages[i].timing.latency,
                 occ: 0,
                 depth: w.stages[i].fifo,
