@@ -21,6 +21,7 @@ fn bench(c: &mut Criterion) {
     let ap = AccParams {
         kernel: kernel.clone(),
         i_frac: 4,
+        i_max: hw.input.intensity.format.max_code() as u32,
         frame: hw.accumulate.frame,
     };
     let ar = accumulate::AccRef {

@@ -261,6 +261,7 @@ fn assert_same_as_reference(s: &igemu::scene::Scene, h: &igemu::config::HwConfig
     let p = AccParams {
         kernel: acc::kernel(h),
         i_frac: h.input.intensity.format.frac_bits,
+        i_max: u32::MAX,
         frame: h.accumulate.frame,
     };
     let size = (plan.layout.grid.width, plan.layout.grid.height);

@@ -614,3 +614,38 @@ fn hdl_vectors_take_the_lane_of_the_channel_asked_for() {
     assert!(!out.exists(), "nothing written");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The accumulate stage picks the word of its window sums from each channel's intensity
+/// format instead of scanning the sample buffer: every sample code of every channel lies
+/// within that format, on per-channel widths and on the colour scene.
+#[test]
+fn sample_codes_stay_within_their_channel_format() {
+    let narrow = hw_text("[accumulate]\nframe = [\"UQ5.0\", \"UQ6.0\", \"UQ5.0\"]\n");
+    for (scene, hw) in [
+        (small_default(), narrow),
+        (
+            Scene::embedded("default-colour").unwrap(),
+            HwConfig::default_config(),
+        ),
+    ] {
+        let (_, taps) = pipeline::run_through(
+            &scene,
+            &hw,
+            RunOptions::FIXED_ONLY,
+            igemu::stage::StageId::Visibility,
+        )
+        .unwrap();
+        for c in 0..3 {
+            let lane = taps.lane(c);
+            let codes = &lane.fixed.samples().samples.i;
+            let max = hw.channel(c).input.intensity.format.max_code();
+            let top = codes.iter().copied().max().unwrap();
+            assert!(
+                i64::from(top) <= max,
+                "{} channel {c}: {top} > {max}",
+                scene.name
+            );
+            assert!(top > 0, "{} channel {c}: a lit sample", scene.name);
+        }
+    }
+}

@@ -233,6 +233,7 @@ fn tile_skipping_is_bit_identical_to_the_whole_region() {
             let ap = AccParams {
                 kernel: accumulate::kernel(&h),
                 i_frac: h.input.intensity.format.frac_bits,
+                i_max: u32::MAX,
                 frame: h.accumulate.frame,
             };
             let (whole, _, _) = accumulate::accumulate(

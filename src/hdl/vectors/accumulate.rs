@@ -34,6 +34,7 @@ pub(super) fn bench(b: &mut Bench, hw: &HwConfig, src: &SceneTaps, rng: &mut Rng
     let ap = AccParams {
         kernel: kernel.clone(),
         i_frac: i_fmt.frac_bits,
+        i_max: u32::MAX,
         frame,
     };
     let signed = kernel.signed();

@@ -66,6 +66,10 @@ pub struct AccParams {
     pub kernel: Kernel,
     /// Fraction bits of the sample intensity codes.
     pub i_frac: u32,
+    /// A bound on the sample intensity codes (the intensity format's largest code): where
+    /// the window sums of codes up to it fit a `u32`, the sample buffer is not scanned for
+    /// its largest code. `u32::MAX`: always scanned.
+    pub i_max: u32,
     /// Frame-memory quantiser.
     pub frame: Quantizer,
 }
@@ -304,10 +308,12 @@ pub(super) fn accumulate_build(
     let mut frame = Frame::cleared(width, height, bg, pool);
     let k = &p.kernel;
     let template = SignalStats::new("accumulate.product", p.frame.format);
-    // The word of the window sums, from the largest intensity code in the buffer.
-    let imax = s.i.par_iter().copied().max().unwrap_or(0);
-    let build = force.unwrap_or(Build {
-        narrow: sums_fit_u32(k, imax),
+    // The word of the window sums: from the codes' bound, else from the largest intensity
+    // code in the buffer. Every word gives the same sums.
+    let narrow =
+        || sums_fit_u32(k, p.i_max) || sums_fit_u32(k, s.i.par_iter().copied().max().unwrap_or(0));
+    let build = force.unwrap_or_else(|| Build {
+        narrow: narrow(),
         avx2: span::has_avx2(),
     });
     let w = width as usize;

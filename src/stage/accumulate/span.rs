@@ -278,6 +278,7 @@ mod tests {
             let p = AccParams {
                 kernel: k,
                 i_frac: 4,
+                i_max: u32::MAX,
                 frame: hw.accumulate.frame,
             };
             let run = |b: Build| {

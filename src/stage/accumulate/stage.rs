@@ -123,6 +123,7 @@ impl Stage for Accumulate {
                 let ap = AccParams {
                     kernel: k.clone(),
                     i_frac: hw.input.intensity.format.frac_bits,
+                    i_max: code_bound(hw.input.intensity.format),
                     frame: hw.accumulate.frame,
                 };
                 let l = cx.layout;
@@ -270,6 +271,7 @@ impl Stage for Accumulate {
                 &AccParams {
                     kernel: a.kernel.clone(),
                     i_frac: cx.hw.input.intensity.format.frac_bits,
+                    i_max: code_bound(cx.hw.input.intensity.format),
                     frame: cx.hw.accumulate.frame,
                 },
                 cx.hw.input.intensity.format.total_bits(),
@@ -461,4 +463,10 @@ fn log_accumulate(
         facts.note(key, v);
     }
     Ok((frame, add, tile_rmw, facts))
+}
+
+/// The largest code of format `f` as a bound on the sample buffer's intensity codes (the
+/// raster and visibility clamp them into the format).
+fn code_bound(f: crate::fixed::QFormat) -> u32 {
+    u32::try_from(f.max_code()).unwrap_or(u32::MAX)
 }
