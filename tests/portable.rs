@@ -34,13 +34,29 @@ fn installed(dir: &Path) -> PathBuf {
 }
 
 /// Runs `exe` in `/` with the cache folder `cache`: (exit code, stdout, stderr).
+///
+/// A binary just copied can be refused with "text file busy" for a moment: a child that
+/// another test thread forks meanwhile holds the copy's write descriptor until its own
+/// exec closes it. The run is then retried, for up to about 5 s.
 fn run_at_root(exe: &Path, cache: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(exe)
-        .args(args)
-        .current_dir("/")
-        .env("IGEMU_CACHE_DIR", cache)
-        .output()
-        .expect("run the copied igemu");
+    let run = || {
+        Command::new(exe)
+            .args(args)
+            .current_dir("/")
+            .env("IGEMU_CACHE_DIR", cache)
+            .output()
+    };
+    let mut out = run();
+    for _ in 0..100 {
+        match &out {
+            Err(e) if e.kind() == std::io::ErrorKind::ExecutableFileBusy => {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                out = run();
+            }
+            _ => break,
+        }
+    }
+    let out = out.expect("run the copied igemu");
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into(),
