@@ -111,6 +111,21 @@ pub(super) fn hsum<W: Word, P: Plane>(
     (sx.wide(), sa.wide(), sd.wide())
 }
 
+/// [`hsum`] of one plane (`r`, taps `c`) at position `x`.
+#[inline]
+pub(super) fn hsum1<W: Word, P: Plane>(c: &[P], r: &[P], x: usize) -> u128 {
+    let m = c.len() / 2;
+    let t0 = m.saturating_sub(x);
+    let t1 = c.len().min((r.len() + m).saturating_sub(x));
+    let n = t1.saturating_sub(t0);
+    let base = x + t0 - m;
+    let mut s = W::default();
+    for (&cv, &v) in c[t0..t0 + n].iter().zip(&r[base..base + n]) {
+        s += W::of(cv.get() as u128) * W::of(v.get() as u128);
+    }
+    s.wide()
+}
+
 /// The vertical pass of output row `y` of a `bw x bh` box over the columns `xa..xb`: the
 /// exact colour, alpha and behind sums into `o` (indexed by column).
 #[inline]

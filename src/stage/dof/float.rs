@@ -3,7 +3,7 @@
 use super::fixed::Exec;
 use super::fixed::{border_sums, share};
 use super::layers::{DepthImage, LayerPlan, layer_boxes};
-use super::uniform;
+use super::uniform::{self, FULL, MIXED};
 use crate::config::AlphaNorm;
 use crate::fnv::Fnv;
 
@@ -178,9 +178,13 @@ fn fast_passes(
     [xi, ai, di]: [&[f64]; 3],
 ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let m = c.len() / 2;
-    let full: Vec<bool> = ai.iter().map(|&a| a == 1.0).collect();
+    // Full windows only: zero-share windows are summed like the rest.
+    let class: Vec<u8> = ai
+        .iter()
+        .map(|&a| if a == 1.0 { FULL } else { MIXED })
+        .collect();
     let val: Vec<u64> = xi.iter().map(|v| v.to_bits()).collect();
-    let win = uniform::windows(bw, bh, m, &full, &val);
+    let win = uniform::windows(bw, bh, m, &class, &val);
     let bsx = border_sums(c, bw);
     // Horizontal pass.
     let mut h = [(); 3].map(|_| vec![0.0; bw * bh]);
@@ -190,7 +194,7 @@ fn fast_passes(
         for x in 0..bw {
             let i = y * bw + x;
             let r = tap_range(c, x, bw);
-            if win.hu[i] {
+            if win.hu[i] == FULL {
                 let v = xi[i];
                 h[0][i] = if r == (0, c.len()) {
                     if last.0 != v.to_bits() {
@@ -230,7 +234,7 @@ fn fast_passes(
         let (ox, oa, od) = (&mut fx[row.clone()], &mut fa[row.clone()], &mut fd[row]);
         let mut x = 0;
         while x < bw {
-            if interior && ur[x] {
+            if interior && ur[x] == FULL {
                 let hv = h[0][y * bw + x];
                 if last.0 != hv.to_bits() {
                     last = (hv.to_bits(), fold(c, r, hv));
@@ -242,7 +246,7 @@ fn fast_passes(
                 continue;
             }
             let xa = x;
-            while x < bw && !(interior && ur[x]) {
+            while x < bw && !(interior && ur[x] == FULL) {
                 x += 1;
             }
             for (t, &cv) in c.iter().enumerate().take(r.1).skip(r.0) {

@@ -1,5 +1,5 @@
 //! The fixed layered passes' buffers, kept between strips and layers
-//! ([`super::fixed`]): a strip's input planes, uniform windows and line buffer, and one
+//! ([`super::fixed`]): a strip's input planes, window classes and line buffer, and one
 //! output row's vertical sums.
 
 use super::fast::{self, Plane};
@@ -7,7 +7,7 @@ use super::fixed::share;
 use super::layers::{DepthImage, LayerPlan};
 use super::uniform;
 
-/// One output row's exact vertical sums over the columns whose window is not uniform.
+/// One output row's exact vertical sums over the columns whose window is mixed.
 #[derive(Default)]
 pub(super) struct RowSums {
     narrow: (Vec<u64>, Vec<u64>, Vec<u64>),
@@ -30,23 +30,23 @@ impl RowSums {
         }
     }
 
-    /// The sums of row `y` at every run of columns with `uniform` false.
+    /// The sums of row `y` at every run of columns whose window is [`uniform::MIXED`].
     pub(super) fn fill<P: Plane>(
         &mut self,
         c: &[P],
         (hx, ha, hd): (&[P], &[P], &[P]),
         dim: (usize, usize),
         y: usize,
-        uniform: &[bool],
+        class: &[u8],
     ) {
         let mut x = 0;
-        while x < uniform.len() {
-            if uniform[x] {
+        while x < class.len() {
+            if class[x] != uniform::MIXED {
                 x += 1;
                 continue;
             }
             let xa = x;
-            while x < uniform.len() && !uniform[x] {
+            while x < class.len() && class[x] == uniform::MIXED {
                 x += 1;
             }
             if self.is_wide {
@@ -85,14 +85,14 @@ impl RowSums {
 
 /// A layer's planes over a strip of its box, kept between strips and layers (one
 /// allocation for the largest): the input colour `x * m`, alpha `m`, behind share and value, the
-/// full-share flags, the uniform windows, the line buffer and one row's vertical sums, in
+/// share classes, the window classes, the line buffer and one row's vertical sums, in
 /// [`Plane`] words.
 pub(super) struct Scratch<P> {
     pub xi: Vec<P>,
     pub ai: Vec<P>,
     pub di: Vec<P>,
     pub val: Vec<u32>,
-    pub full: Vec<bool>,
+    pub class: Vec<u8>,
     pub win: uniform::Windows,
     pub hx: Vec<P>,
     pub ha: Vec<P>,
@@ -107,7 +107,7 @@ impl<P: Plane> Scratch<P> {
             ai: Vec::new(),
             di: Vec::new(),
             val: Vec::new(),
-            full: Vec::new(),
+            class: Vec::new(),
             win: uniform::Windows::default(),
             hx: Vec::new(),
             ha: Vec::new(),

@@ -154,11 +154,16 @@ pub(super) fn run_strip<P: Plane>(
     let eh = e1 - e0;
     s.input(img, plan, l, (x0, y0 + e0, bw, eh));
     let (xi, ai, di, val) = (&s.xi[..], &s.ai[..], &s.di[..], &s.val[..]);
-    // Uniform windows (docs/dof.md): exact without MACs where, besides the window
-    // being uniform, neither word saturates and the box's tap sums are the image's.
-    s.full.clear();
-    s.full.extend(ai.iter().map(|&a| a.get() == n2));
-    s.win.compute(bw, eh, m, &s.full, val);
+    // Window classes (docs/dof.md, "Uniform windows"): a full window is exact without
+    // MACs where, besides, neither word saturates and the box's tap sums are the image's; a
+    // zero window's colour and alpha sums are zero.
+    s.class.clear();
+    s.class.extend(ai.iter().map(|&a| match a.get() {
+        0 => uniform::ZERO,
+        a if a == n2 => uniform::FULL,
+        _ => uniform::MIXED,
+    }));
+    s.win.compute(bw, eh, m, &s.class, val);
     // `h <= line_max && h * bsy <= acc_max` is `h <= lim`, the row's limit.
     for (yy, (u, xi)) in s
         .win
@@ -168,8 +173,13 @@ pub(super) fn run_strip<P: Plane>(
         .enumerate()
     {
         let y = e0 + yy;
+        let demote = |u: &mut u8| {
+            if *u == uniform::FULL {
+                *u = uniform::MIXED;
+            }
+        };
         if bsy[y] != wy[y + y0] {
-            u.fill(false);
+            u.iter_mut().for_each(demote);
             continue;
         }
         let lim = match bsy[y] {
@@ -178,7 +188,9 @@ pub(super) fn run_strip<P: Plane>(
         };
         let cols = bsx.iter().zip(&wx[x0..x0 + bw]);
         for ((u, xi), (&bx, &wxx)) in u.iter_mut().zip(xi).zip(cols) {
-            *u &= bx == wxx && xi.get() as u128 * bx as u128 <= lim;
+            if !(bx == wxx && xi.get() as u128 * bx as u128 <= lim) {
+                demote(u);
+            }
         }
     }
     let (u, hu) = (&s.win.u[..], &s.win.hu[..]);
@@ -202,6 +214,7 @@ pub(super) fn run_strip<P: Plane>(
     hd.clear();
     // `x * m` is at most a u32 code times n2: a bound, not a scan.
     let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
+    let wide_d = !fast::fits_u64(u128::from(n2), p.coef_bits);
     let mut hmax = 0u64;
     for yy in 0..eh {
         let row = yy * bw..(yy + 1) * bw;
@@ -218,10 +231,19 @@ pub(super) fn run_strip<P: Plane>(
                         rd[i].get() as u128,
                     )
                 }),
-                _ if hu[i] => {
+                _ if hu[i] == uniform::FULL => {
                     let b = bsx[x] as u128;
                     let v = |p: &[P]| p[x].get() as u128 * b;
                     fast::mac_out((v(rx), v(ra), v(rd)), line_max)
+                }
+                // No share anywhere in the row window: only the behind sum is not zero.
+                _ if hu[i] == uniform::ZERO => {
+                    let sd = if wide_d {
+                        fast::hsum1::<u128, P>(cp, rd, x)
+                    } else {
+                        fast::hsum1::<u64, P>(cp, rd, x)
+                    };
+                    fast::mac_out((0, 0, sd), line_max)
                 }
                 _ => {
                     let sums = if wide_h {
@@ -281,8 +303,12 @@ pub(super) fn run_strip<P: Plane>(
             let i = yy * bw + x;
             let pi = (y - r0) * w + x + x0;
             let skip = tile_skip.as_ref().is_some_and(|t| t[(y - r0) * bw + x]);
-            if exec != Exec::Full && ur[x] {
-                // Uniform window: colour v exactly, alpha one (docs/dof.md).
+            if exec != Exec::Full && ur[x] == uniform::ZERO {
+                // Zero window: no colour and no alpha, nothing to composite.
+                continue;
+            }
+            if exec != Exec::Full && ur[x] == uniform::FULL {
+                // Full window: colour v exactly, alpha one (docs/dof.md).
                 if !skip {
                     work.divides += 1;
                 }
