@@ -111,19 +111,39 @@ pub(super) fn hsum<W: Word, P: Plane>(
     (sx.wide(), sa.wide(), sd.wide())
 }
 
-/// [`hsum`] of one plane (`r`, taps `c`) at position `x`.
+/// The horizontal sums of the positions `xa..xb` of one row (the planes and taps as in
+/// [`hsum`]) into `o` (indexed by position); with `zero` (no share in any row window of the
+/// run) only the behind sums, the others being zero. Positions whose taps all lie in the row
+/// go [`mac_run`]'s way, the `M` either end [`hsum`]'s.
 #[inline]
-pub(super) fn hsum1<W: Word, P: Plane>(c: &[P], r: &[P], x: usize) -> u128 {
+pub(super) fn hsum_run<W: Word, P: Plane>(
+    c: &[P],
+    (rx, ra, rd): (&[P], &[P], &[P]),
+    (xa, xb): (usize, usize),
+    zero: bool,
+    (ox, oa, od): (&mut [W], &mut [W], &mut [W]),
+) {
     let m = c.len() / 2;
-    let t0 = m.saturating_sub(x);
-    let t1 = c.len().min((r.len() + m).saturating_sub(x));
-    let n = t1.saturating_sub(t0);
-    let base = x + t0 - m;
-    let mut s = W::default();
-    for (&cv, &v) in c[t0..t0 + n].iter().zip(&r[base..base + n]) {
-        s += W::of(cv.get() as u128) * W::of(v.get() as u128);
+    let bw = rx.len();
+    // Interior positions `[ia, ib)`: `m <= x < bw - m`.
+    let ia = xa.max(m).min(xb);
+    let ib = xb.min(bw.saturating_sub(m)).max(ia);
+    for x in (xa..ia).chain(ib..xb) {
+        let (sx, sa, sd) = hsum::<W, P>(c, (rx, ra, rd), x);
+        (ox[x], oa[x], od[x]) = (W::of(sx), W::of(sa), W::of(sd));
     }
-    s.wide()
+    if ia == ib {
+        return;
+    }
+    let off = |t: usize| ia + t - m;
+    let (ox, oa, od) = (&mut ox[ia..ib], &mut oa[ia..ib], &mut od[ia..ib]);
+    if zero {
+        ox.fill(W::default());
+        oa.fill(W::default());
+        mac_run(c, 0..c.len(), [rd], off, [od]);
+    } else {
+        mac_run(c, 0..c.len(), [rx, ra, rd], off, [ox, oa, od]);
+    }
 }
 
 /// The vertical pass of output row `y` of a `bw x bh` box over the columns `xa..xb`: the
@@ -140,48 +160,52 @@ pub(super) fn vsum_row<W: Word, P: Plane>(
     let m = c.len() / 2;
     let t0 = m.saturating_sub(y);
     let t1 = c.len().min((bh + m).saturating_sub(y));
-    // Columns in groups of `L`: every tap into registers, one store per column.
+    let off = |t: usize| (y + t - m) * bw + xa;
+    let out = [&mut ox[xa..xb], &mut oa[xa..xb], &mut od[xa..xb]];
+    mac_run(c, t0..t1, [hx, ha, hd], off, out);
+}
+
+/// `out[k][j] = sum of c[t] src[k][off(t) + j]` over the taps `t` in `taps`, for every
+/// output `j` (the `out` slices have one length): outputs in groups of eight, every tap into
+/// registers, one store per output.
+#[inline(always)]
+fn mac_run<W: Word, P: Plane, const N: usize>(
+    c: &[P],
+    taps: std::ops::Range<usize>,
+    src: [&[P]; N],
+    off: impl Fn(usize) -> usize,
+    mut out: [&mut [W]; N],
+) {
     const L: usize = 8;
-    let mut x = xa;
-    while x + L <= xb {
-        let (mut sx, mut sa, mut sd) = ([W::default(); L], [W::default(); L], [W::default(); L]);
-        for (t, &cv) in c.iter().enumerate().take(t1).skip(t0) {
-            let row = (y + t - m) * bw + x;
-            let cw = W::of(cv.get() as u128);
-            let (hr, ar, dr): (&[P; L], &[P; L], &[P; L]) = (
-                hx[row..row + L].try_into().expect("L columns"),
-                ha[row..row + L].try_into().expect("L columns"),
-                hd[row..row + L].try_into().expect("L columns"),
-            );
-            for j in 0..L {
-                sx[j] += cw * W::of(hr[j].get() as u128);
-                sa[j] += cw * W::of(ar[j].get() as u128);
-                sd[j] += cw * W::of(dr[j].get() as u128);
+    let n = out[0].len();
+    let mut j = 0;
+    while j + L <= n {
+        let mut s = [[W::default(); L]; N];
+        for t in taps.clone() {
+            let cw = W::of(c[t].get() as u128);
+            let o = off(t) + j;
+            for (sk, src) in s.iter_mut().zip(&src) {
+                let r: &[P; L] = src[o..o + L].try_into().expect("L outputs");
+                for (a, v) in sk.iter_mut().zip(r) {
+                    *a += cw * W::of(v.get() as u128);
+                }
             }
         }
-        ox[x..x + L].copy_from_slice(&sx);
-        oa[x..x + L].copy_from_slice(&sa);
-        od[x..x + L].copy_from_slice(&sd);
-        x += L;
+        for (o, sk) in out.iter_mut().zip(&s) {
+            o[j..j + L].copy_from_slice(sk);
+        }
+        j += L;
     }
-    let xa = x;
-    let (ox, oa, od) = (&mut ox[xa..xb], &mut oa[xa..xb], &mut od[xa..xb]);
-    ox.fill(W::default());
-    oa.fill(W::default());
-    od.fill(W::default());
-    for (t, &cv) in c.iter().enumerate().take(t1).skip(t0) {
-        let row = (y + t - m) * bw;
-        let cw = W::of(cv.get() as u128);
-        let r = row + xa..row + xb;
-        for (((o, &v), (p, &a)), (q, &d)) in ox
-            .iter_mut()
-            .zip(&hx[r.clone()])
-            .zip(oa.iter_mut().zip(&ha[r.clone()]))
-            .zip(od.iter_mut().zip(&hd[r]))
-        {
-            *o += cw * W::of(v.get() as u128);
-            *p += cw * W::of(a.get() as u128);
-            *q += cw * W::of(d.get() as u128);
+    for o in out.iter_mut() {
+        o[j..].fill(W::default());
+    }
+    for t in taps {
+        let cw = W::of(c[t].get() as u128);
+        let o = off(t);
+        for (out, src) in out.iter_mut().zip(&src) {
+            for (a, v) in out[j..].iter_mut().zip(&src[o + j..o + n]) {
+                *a += cw * W::of(v.get() as u128);
+            }
         }
     }
 }

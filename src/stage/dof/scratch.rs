@@ -1,13 +1,14 @@
 //! The fixed layered passes' buffers, kept between strips and layers
 //! ([`super::fixed`]): a strip's input planes, window classes and line buffer, and one
-//! output row's vertical sums.
+//! row's horizontal and vertical sums.
 
 use super::fast::{self, Plane};
 use super::fixed::share;
 use super::layers::{DepthImage, LayerPlan};
 use super::uniform;
 
-/// One output row's exact vertical sums over the columns whose window is mixed.
+/// One row's exact tap sums (of the horizontal pass, or the vertical) over the positions
+/// whose window needs them.
 #[derive(Default)]
 pub(super) struct RowSums {
     narrow: (Vec<u64>, Vec<u64>, Vec<u64>),
@@ -30,46 +31,41 @@ impl RowSums {
         }
     }
 
-    /// The sums of row `y` at every run of columns whose window is [`uniform::MIXED`].
+    /// The vertical sums of row `y` at every run of columns whose window is
+    /// [`uniform::MIXED`].
     pub(super) fn fill<P: Plane>(
         &mut self,
         c: &[P],
-        (hx, ha, hd): (&[P], &[P], &[P]),
+        planes: (&[P], &[P], &[P]),
         dim: (usize, usize),
         y: usize,
         class: &[u8],
     ) {
-        let mut x = 0;
-        while x < class.len() {
-            if class[x] != uniform::MIXED {
-                x += 1;
-                continue;
-            }
-            let xa = x;
-            while x < class.len() && class[x] == uniform::MIXED {
-                x += 1;
-            }
+        for_runs(class, uniform::MIXED, |xa, xb| {
             if self.is_wide {
                 let o = &mut self.wide;
-                fast::vsum_row(
-                    c,
-                    (hx, ha, hd),
-                    dim,
-                    y,
-                    (xa, x),
-                    (&mut o.0, &mut o.1, &mut o.2),
-                );
+                fast::vsum_row(c, planes, dim, y, (xa, xb), (&mut o.0, &mut o.1, &mut o.2));
             } else {
                 let o = &mut self.narrow;
-                fast::vsum_row(
-                    c,
-                    (hx, ha, hd),
-                    dim,
-                    y,
-                    (xa, x),
-                    (&mut o.0, &mut o.1, &mut o.2),
-                );
+                fast::vsum_row(c, planes, dim, y, (xa, xb), (&mut o.0, &mut o.1, &mut o.2));
             }
+        });
+    }
+
+    /// The horizontal sums of one row (`planes`) at every position whose row window
+    /// (`class`) is not [`uniform::FULL`].
+    pub(super) fn hfill<P: Plane>(&mut self, c: &[P], planes: (&[P], &[P], &[P]), class: &[u8]) {
+        for k in [uniform::MIXED, uniform::ZERO] {
+            let zero = k == uniform::ZERO;
+            for_runs(class, k, |xa, xb| {
+                if self.is_wide {
+                    let o = &mut self.wide;
+                    fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
+                } else {
+                    let o = &mut self.narrow;
+                    fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
+                }
+            });
         }
     }
 
@@ -83,10 +79,26 @@ impl RowSums {
     }
 }
 
+/// `f(xa, xb)` for every maximal run `xa..xb` of `class` equal to `k`.
+fn for_runs(class: &[u8], k: u8, mut f: impl FnMut(usize, usize)) {
+    let mut x = 0;
+    while x < class.len() {
+        if class[x] != k {
+            x += 1;
+            continue;
+        }
+        let xa = x;
+        while x < class.len() && class[x] == k {
+            x += 1;
+        }
+        f(xa, x);
+    }
+}
+
 /// A layer's planes over a strip of its box, kept between strips and layers (one
 /// allocation for the largest): the input colour `x * m`, alpha `m`, behind share and value, the
-/// share classes, the window classes, the line buffer and one row's vertical sums, in
-/// [`Plane`] words.
+/// share classes, the window classes, the line buffer and one row's horizontal and vertical
+/// sums, in [`Plane`] words.
 pub(super) struct Scratch<P> {
     pub xi: Vec<P>,
     pub ai: Vec<P>,
@@ -97,6 +109,7 @@ pub(super) struct Scratch<P> {
     pub hx: Vec<P>,
     pub ha: Vec<P>,
     pub hd: Vec<P>,
+    pub hrow: RowSums,
     pub rows: RowSums,
 }
 
@@ -112,6 +125,7 @@ impl<P: Plane> Scratch<P> {
             hx: Vec::new(),
             ha: Vec::new(),
             hd: Vec::new(),
+            hrow: RowSums::default(),
             rows: RowSums::default(),
         }
     }

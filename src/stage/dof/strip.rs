@@ -209,20 +209,25 @@ pub(super) fn run_strip<P: Plane>(
     // Horizontal pass into the line buffer: a saturated sum fits u64
     // (`line_bits` <= 64) and so does an alpha sum (taps of at most 2^20 times n2).
     let (hx, ha, hd) = (&mut s.hx, &mut s.ha, &mut s.hd);
-    hx.clear();
-    ha.clear();
-    hd.clear();
+    for v in [&mut *hx, &mut *ha, &mut *hd] {
+        v.clear();
+        v.resize(eh * bw, P::default());
+    }
     // `x * m` is at most a u32 code times n2: a bound, not a scan.
     let wide_h = !fast::fits_u64(u128::from(u32::MAX) * u128::from(n2), p.coef_bits);
-    let wide_d = !fast::fits_u64(u128::from(n2), p.coef_bits);
+    s.hrow.reset(bw, wide_h);
     let mut hmax = 0u64;
     for yy in 0..eh {
         let row = yy * bw..(yy + 1) * bw;
-        let (rx, ra, rd) = (&xi[row.clone()], &ai[row.clone()], &di[row]);
+        let (rx, ra, rd) = (&xi[row.clone()], &ai[row.clone()], &di[row.clone()]);
+        let hr = &hu[row.clone()];
+        let (hx, ha, hd) = (&mut hx[row.clone()], &mut ha[row.clone()], &mut hd[row]);
         // Rows of the neighbouring strips are computed again, counted there.
         let counted = (r0..r1).contains(&(e0 + yy));
+        if exec != Exec::Full {
+            s.hrow.hfill(cp, (rx, ra, rd), hr);
+        }
         for x in 0..bw {
-            let i = yy * bw + x;
             let r = match exec {
                 Exec::Full => row_mac(c, x, bw, line_max, |i| {
                     (
@@ -231,28 +236,12 @@ pub(super) fn run_strip<P: Plane>(
                         rd[i].get() as u128,
                     )
                 }),
-                _ if hu[i] == uniform::FULL => {
+                _ if hr[x] == uniform::FULL => {
                     let b = bsx[x] as u128;
                     let v = |p: &[P]| p[x].get() as u128 * b;
                     fast::mac_out((v(rx), v(ra), v(rd)), line_max)
                 }
-                // No share anywhere in the row window: only the behind sum is not zero.
-                _ if hu[i] == uniform::ZERO => {
-                    let sd = if wide_d {
-                        fast::hsum1::<u128, P>(cp, rd, x)
-                    } else {
-                        fast::hsum1::<u64, P>(cp, rd, x)
-                    };
-                    fast::mac_out((0, 0, sd), line_max)
-                }
-                _ => {
-                    let sums = if wide_h {
-                        fast::hsum::<u128, P>(cp, (rx, ra, rd), x)
-                    } else {
-                        fast::hsum::<u64, P>(cp, (rx, ra, rd), x)
-                    };
-                    fast::mac_out(sums, line_max)
-                }
+                _ => fast::mac_out(s.hrow.get(x), line_max),
             };
             if r.overflow && counted {
                 work.line_overflows += 1;
@@ -260,9 +249,9 @@ pub(super) fn run_strip<P: Plane>(
                     return Err(("dof.line".into(), p.line_bits));
                 }
             }
-            hx.push(P::put(r.x as u64));
-            ha.push(P::put(r.a as u64));
-            hd.push(P::put(r.d as u64));
+            hx[x] = P::put(r.x as u64);
+            ha[x] = P::put(r.a as u64);
+            hd[x] = P::put(r.d as u64);
             hmax = hmax.max(r.x as u64).max(r.d as u64);
         }
     }
