@@ -2,6 +2,7 @@
 //! and each layer's bounding box and work for the cycle model.
 
 use super::kernel::{KernelDifferences, Mask2, kernel_half_size, kernel_taps_f64};
+use super::keys::distinct_descending;
 use super::lens::{LensMap, SIGMA_FRAC};
 use super::mask::taps_fixed;
 use crate::config::{AlphaNorm, DofKernel};
@@ -166,17 +167,8 @@ pub fn plan_layers_in(
             (v, bg)
         })
         .collect();
-    let mut keys: Vec<u32> = pool.take(parts.iter().map(|p| p.0.len()).sum::<usize>() + 1);
-    for (v, _) in &parts {
-        keys.extend_from_slice(v);
-    }
-    if parts.iter().any(|p| p.1) {
-        keys.push(u32::MAX);
-    }
-    let mut tmp: Vec<u32> = pool.scratch(keys.len(), 0);
-    sort_descending(&mut keys, &mut tmp);
-    pool.give(tmp);
-    keys.dedup();
+    let lists: Vec<&[u32]> = parts.iter().map(|p| &p.0[..]).collect();
+    let keys = distinct_descending(&lists, parts.iter().any(|p| p.1), pool);
     let coder = lens.sigma_coder();
     let sig = |k: u32| coder.code(k) as f64 / (1u64 << SIGMA_FRAC) as f64;
     // Every layer's mask lies between the masks of its ends (sigma is monotone in depth),
@@ -332,33 +324,6 @@ pub fn plan_layers_in(
     })
 }
 
-/// Sorts `keys` largest first: a least-significant-digit radix sort in three passes of 11
-/// bits (`tmp`: scratch of the same length), linear in the keys.
-fn sort_descending(keys: &mut [u32], tmp: &mut [u32]) {
-    const BITS: u32 = 11;
-    const MASK: u32 = (1 << BITS) - 1;
-    let (mut src, mut dst) = (keys, tmp);
-    for pass in 0..3 {
-        let digit = |k: u32| (((!k) >> (pass * BITS)) & MASK) as usize;
-        let mut start = [0usize; 1 << BITS];
-        for &k in src.iter() {
-            start[digit(k)] += 1;
-        }
-        let mut sum = 0;
-        for s in start.iter_mut() {
-            (*s, sum) = (sum, sum + *s);
-        }
-        for &k in src.iter() {
-            let d = digit(k);
-            dst[start[d]] = k;
-            start[d] += 1;
-        }
-        std::mem::swap(&mut src, &mut dst);
-    }
-    // Three passes leave the sorted keys in `tmp`.
-    dst.copy_from_slice(src);
-}
-
 /// One layer as the cycle model sees it: the pixels of its box (both passes produce one
 /// output sample per box pixel; a sigma = 0 layer passes its box through) and its taps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -446,19 +411,6 @@ fn find_boxes(w: usize, h: usize, plan: &LayerPlan) -> Vec<Option<LayerBox>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use proptest::prelude::*;
-
-    proptest! {
-        /// The radix sort orders any keys as the comparison sort does, largest first.
-        #[test]
-        fn radix_sort_is_a_descending_sort(mut keys in prop::collection::vec(any::<u32>(), 0..3000)) {
-            let mut tmp = vec![0; keys.len()];
-            let mut want = keys.clone();
-            want.sort_unstable_by(|a, b| b.cmp(a));
-            sort_descending(&mut keys, &mut tmp);
-            prop_assert_eq!(keys, want);
-        }
-    }
 
     /// The boxes are found once per plan and image size: a second call gives the first
     /// call's boxes, and another size finds its own.
@@ -496,13 +448,5 @@ mod tests {
         // Read as 4 x 6: layer 1 is in columns 0..4 of rows 2..6, the box one wider.
         assert_eq!(layer_boxes(4, 6, &plan), find_boxes(4, 6, &plan));
         assert_ne!(find_boxes(4, 6, &plan), find_boxes(w, h, &plan));
-    }
-
-    #[test]
-    fn radix_sort_keeps_the_extremes() {
-        let mut keys = vec![0, u32::MAX, 1 << 22, u32::MAX - 1, 0, 1 << 11];
-        let mut tmp = vec![0; keys.len()];
-        sort_descending(&mut keys, &mut tmp);
-        assert_eq!(keys, [u32::MAX, u32::MAX - 1, 1 << 22, 1 << 11, 0, 0]);
     }
 }

@@ -96,6 +96,7 @@ mod fast;
 mod fixed;
 mod float;
 mod kernel;
+mod keys;
 mod layered;
 mod layers;
 mod lens;
