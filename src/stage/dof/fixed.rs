@@ -152,28 +152,42 @@ pub(super) fn share(
     l: usize,
     n2: u32,
 ) -> (u32, u32) {
-    let own = if img_key == u32::MAX { 0 } else { cov as u32 };
-    let (mut m, mut b) = (0, 0);
-    if img_key != u32::MAX {
-        if idx as usize == l {
-            m = own;
-        }
-        if idx as usize <= l {
-            b = own;
+    Shares::new(plan, l, n2).of(img_key, cov, idx)
+}
+
+/// [`share`] of one layer, its pixel-independent tests made once (for a kernel over a row;
+/// selects, no branches).
+#[derive(Clone, Copy)]
+pub(super) struct Shares {
+    l: usize,
+    n2: u32,
+    /// The background layer is `l` or behind it / is `l`.
+    bg_behind: bool,
+    bg_here: bool,
+    image_norm: bool,
+}
+
+impl Shares {
+    pub(super) fn new(plan: &LayerPlan, l: usize, n2: u32) -> Self {
+        Self {
+            l,
+            n2,
+            bg_behind: plan.background.is_some_and(|bg| bg <= l),
+            bg_here: plan.background == Some(l),
+            image_norm: plan.alpha_norm == AlphaNorm::Image,
         }
     }
-    if let Some(bg) = plan.background
-        && bg <= l
-    {
-        let rest = n2 - own.min(n2);
-        b += rest;
-        if bg == l {
-            m += rest;
-        }
-    }
-    match plan.alpha_norm {
-        AlphaNorm::Behind => (m, b),
-        AlphaNorm::Image => (m, n2),
+
+    /// The shares of a pixel of depth code `key`, coverage `cov` and layer index `idx`.
+    #[inline(always)]
+    pub(super) fn of(self, key: u32, cov: u16, idx: u16) -> (u32, u32) {
+        let valid = key != u32::MAX;
+        let own = if valid { u32::from(cov) } else { 0 };
+        let rest = self.n2 - own.min(self.n2);
+        let (idx, l) = (usize::from(idx), self.l);
+        let m = if valid && idx == l { own } else { 0 } + if self.bg_here { rest } else { 0 };
+        let b = if valid && idx <= l { own } else { 0 } + if self.bg_behind { rest } else { 0 };
+        (m, if self.image_norm { self.n2 } else { b })
     }
 }
 

@@ -3,7 +3,7 @@
 //! row's horizontal and vertical sums.
 
 use super::fast::{self, Plane};
-use super::fixed::share;
+use super::fixed::Shares;
 use super::layers::{DepthImage, LayerPlan};
 use super::uniform;
 
@@ -130,7 +130,7 @@ impl<P: Plane> Scratch<P> {
         }
     }
 
-    /// Layer `l`'s input planes over the rectangle `(x0, y0, bw, bh)`.
+    /// Layer `l`'s input planes and share classes over the rectangle `(x0, y0, bw, bh)`.
     pub(super) fn input(
         &mut self,
         img: &DepthImage<u32>,
@@ -143,19 +143,27 @@ impl<P: Plane> Scratch<P> {
         self.ai.resize(n, P::default());
         self.di.resize(n, P::default());
         self.val.resize(n, 0);
+        self.class.resize(n, uniform::MIXED);
+        let shares = Shares::new(plan, l, img.n2);
         for (yy, y) in (y0..y0 + bh).enumerate() {
             let r = y * img.width + x0..y * img.width + x0 + bw;
             let (key, cov) = (&img.key[r.clone()], &img.cov[r.clone()]);
             let (idx, value) = (&plan.index[r.clone()], &img.value[r]);
             let o = yy * bw..(yy + 1) * bw;
             let (xi, ai) = (&mut self.xi[o.clone()], &mut self.ai[o.clone()]);
-            let (di, val) = (&mut self.di[o.clone()], &mut self.val[o]);
+            let (di, val) = (&mut self.di[o.clone()], &mut self.val[o.clone()]);
+            let class = &mut self.class[o];
             val.copy_from_slice(value);
             for x in 0..bw {
-                let (s, d) = share(plan, key[x], cov[x], idx[x], l, img.n2);
+                let (s, d) = shares.of(key[x], cov[x], idx[x]);
                 xi[x] = P::put(u64::from(value[x]) * u64::from(s));
                 ai[x] = P::put(u64::from(s));
                 di[x] = P::put(u64::from(d));
+                class[x] = match s {
+                    0 => uniform::ZERO,
+                    s if s == img.n2 => uniform::FULL,
+                    _ => uniform::MIXED,
+                };
             }
         }
     }

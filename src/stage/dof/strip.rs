@@ -157,12 +157,6 @@ pub(super) fn run_strip<P: Plane>(
     // Window classes (docs/dof.md, "Uniform windows"): a full window is exact without
     // MACs where, besides, neither word saturates and the box's tap sums are the image's; a
     // zero window's colour and alpha sums are zero.
-    s.class.clear();
-    s.class.extend(ai.iter().map(|&a| match a.get() {
-        0 => uniform::ZERO,
-        a if a == n2 => uniform::FULL,
-        _ => uniform::MIXED,
-    }));
     s.win.compute(bw, eh, m, &s.class, val);
     // `h <= line_max && h * bsy <= acc_max` is `h <= lim`, the row's limit.
     for (yy, (u, xi)) in s
