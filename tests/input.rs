@@ -10,6 +10,8 @@
 //! * overflow mode `ERROR` stops with `Error::Overflow` naming `input.x`, `input.y`,
 //!   `input.z` or `input.intensity`; the host's guard band keeps coordinates in range;
 //! * line widths and point sizes are rounded to the coordinate grid, at least one unit;
+//! * in chunks on the threads: the same on one thread and two, and the first overflow in
+//!   scene order is the error;
 //! * tokens: vertices per primitive in processing order (surfaces in scene order, then
 //!   light points);
 //! * `input::footprint`: its quantised triangle is the stage's, and its pixel box holds
@@ -469,4 +471,79 @@ fn footprints_hold_the_default_scene() {
     let s = Scene::default_scene();
     let seen = footprints_hold_the_fragments(&s, &HwConfig::default_config()).unwrap();
     assert!(seen > 1_000_000, "{seen} fragments");
+}
+
+/// The stage quantises in chunks of primitives on the threads: the primitives, every
+/// signal's statistics (float error sums to the bit) and the local error are the same on
+/// one thread and two, equal to the serial quantisation's in codes, counts and ranges; the
+/// sums agree with the serial ones to rounding. With overflow mode ERROR the error is the
+/// first overflowing vertex in scene order, thousands of primitives apart.
+#[test]
+fn chunked_quantisation_is_deterministic_and_keeps_scene_order() {
+    let mut rng = Rng::new(11);
+    let mut v = || {
+        sv(
+            rng.range(0.0, 64.0),
+            rng.range(0.0, 48.0),
+            rng.range(0.0, 1.0),
+            rng.range(0.0, 1.0),
+        )
+    };
+    let prims: Vec<Primitive> = (0..5000)
+        .map(|_| Primitive::Triangle([v(), v(), v()]))
+        .collect();
+    let h = HwConfig::default_config();
+    let on = |threads: usize, prims: &[Primitive], h: &HwConfig| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| input::quantize(&host(prims.to_vec()), h, 1))
+    };
+    let (one, two) = (on(1, &prims, &h).unwrap(), on(2, &prims, &h).unwrap());
+    assert_eq!(one.prims, two.prims);
+    assert_eq!(one.local, two.local);
+    assert_eq!(one.vertices, 15000);
+    let serial: Vec<_> = prims
+        .iter()
+        .map(|p| input::quantize(&host(vec![*p]), &h, 1).unwrap())
+        .collect();
+    assert_eq!(
+        one.prims,
+        serial.iter().map(|q| q.prims[0]).collect::<Vec<_>>()
+    );
+    for (k, (a, b)) in one.signals.iter().zip(&two.signals).enumerate() {
+        assert_eq!(
+            serde_json::to_value(a).unwrap(),
+            serde_json::to_value(b).unwrap()
+        );
+        let count: u64 = serial.iter().map(|q| q.signals[k].count).sum();
+        let err: f64 = serial.iter().map(|q| q.signals[k].err_sum).sum();
+        assert_eq!(a.count, count, "{}", a.name);
+        assert_eq!(a.min, serial.iter().filter_map(|q| q.signals[k].min).min());
+        assert_eq!(a.max, serial.iter().filter_map(|q| q.signals[k].max).max());
+        assert!((a.err_sum - err).abs() < 1e-9 * count as f64, "{}", a.name);
+    }
+    // Two bad vertices far apart: the first one in scene order is named.
+    let mut h = HwConfig::default_config();
+    h.input.coord.overflow = Overflow::Error;
+    let mut bad = prims.clone();
+    bad[1500] = Primitive::Triangle([
+        sv(10.0, 10.0, 0.5, 0.5),
+        sv(5000.0, 10.0, 0.5, 0.5),
+        sv(10.0, 10.0, 0.5, 0.5),
+    ]);
+    bad[4200] = Primitive::Triangle([sv(6000.0, 10.0, 0.5, 0.5); 3]);
+    for threads in [1, 2] {
+        match on(threads, &bad, &h) {
+            Err(Error::Overflow { signal, value, .. }) => {
+                assert_eq!(
+                    (signal.as_str(), value),
+                    ("input.x", 80000),
+                    "{threads} threads"
+                );
+            }
+            other => panic!("{threads} threads: {:?}", other.err()),
+        }
+    }
 }

@@ -125,14 +125,6 @@ fn unfinish(e: &LocalError) -> LocalError {
     }
 }
 
-fn add_local(into: &mut LocalError, e: &LocalError) {
-    into.values += e.values;
-    into.identical += e.identical;
-    into.max_abs_lsb = into.max_abs_lsb.max(e.max_abs_lsb);
-    into.mean_lsb += e.mean_lsb;
-    into.mismatched_items += e.mismatched_items;
-}
-
 /// A note that is a local error (e.g. the raster's `depth_local`).
 fn local_of(v: &serde_json::Value) -> Option<LocalError> {
     let o = v.as_object()?;
@@ -178,17 +170,16 @@ impl Merge {
             }
         }
         if let Some(e) = &r.local {
-            add_local(
-                self.local.get_or_insert_with(LocalError::default),
-                &unfinish(e),
-            );
+            self.local
+                .get_or_insert_with(LocalError::default)
+                .merge(&unfinish(e));
         }
         for (k, v) in &r.notes {
             if let Some(e) = local_of(v) {
-                add_local(
-                    self.note_locals.entry(k.clone()).or_default(),
-                    &unfinish(&e),
-                );
+                self.note_locals
+                    .entry(k.clone())
+                    .or_default()
+                    .merge(&unfinish(&e));
             }
         }
         if let Some(t) = &o.tokens {

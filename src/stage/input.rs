@@ -14,6 +14,7 @@ use crate::config::HwConfig;
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, SignalStats};
 use crate::scene::{HostScene, Primitive, Scene, ScreenVertex};
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// A quantised vertex: raw codes.
@@ -102,6 +103,36 @@ impl Quantizers<'_> {
         Ok(QVertex { x, y, z, i })
     }
 
+    fn prim(&mut self, p: &Primitive) -> Result<QPrim> {
+        Ok(match p {
+            Primitive::Triangle(v) => QPrim::Triangle([
+                self.vertex(&v[0])?,
+                self.vertex(&v[1])?,
+                self.vertex(&v[2])?,
+            ]),
+            Primitive::Line { a, b, width } => QPrim::Line {
+                a: self.vertex(a)?,
+                b: self.vertex(b)?,
+                width: self.length(*width),
+            },
+            Primitive::Point { v, size } => QPrim::Point {
+                v: self.vertex(v)?,
+                size: self.length(*size),
+            },
+        })
+    }
+
+    /// Adds a later chunk's statistics.
+    fn merge(&mut self, o: &Self) {
+        self.x.merge(&o.x);
+        self.y.merge(&o.y);
+        self.z.merge(&o.z);
+        for (a, b) in self.i.iter_mut().zip(&o.i) {
+            a.merge(b);
+        }
+        self.local.merge(&o.local);
+    }
+
     fn length(&mut self, px: f64) -> i64 {
         // Widths and sizes: round to the coordinate grid, at least one unit.
         let units = (px * (1u64 << self.hw.subpixel_bits()) as f64).round();
@@ -140,14 +171,19 @@ pub fn quantize(host: &HostScene, hw: &HwConfig, channels: usize) -> Result<Quan
     quantize_into(host, hw, channels, Vec::new())
 }
 
-/// [`quantize`] into the list `out` (cleared first; one kept from an earlier frame).
+/// Primitives per chunk of [`quantize_into`]'s parallel pass.
+const CHUNK: usize = 1 << 10;
+
+/// [`quantize`] into the list `out` (one kept from an earlier frame). In chunks of
+/// primitives on the threads, each with its own statistics, merged in scene order (the
+/// same on any thread count); the first overflow error in scene order is the one returned.
 pub fn quantize_into(
     host: &HostScene,
     hw: &HwConfig,
     channels: usize,
     mut out: Vec<QPrim>,
 ) -> Result<Quantized> {
-    let mut qs = Quantizers {
+    let new = || Quantizers {
         hw,
         channels,
         x: SignalStats::new("input.x", hw.input.coord.format),
@@ -163,31 +199,37 @@ pub fn quantize_into(
             .collect(),
         local: LocalError::default(),
     };
+    let blank = QPrim::Point {
+        v: QVertex {
+            x: 0,
+            y: 0,
+            z: 0,
+            i: [0; 3],
+        },
+        size: 0,
+    };
     out.clear();
-    out.reserve(host.prims.len());
-    let mut vertices = 0u64;
-    for p in &host.prims {
-        vertices += vertices_of(p) as u64;
-        out.push(match p {
-            Primitive::Triangle(v) => {
-                QPrim::Triangle([qs.vertex(&v[0])?, qs.vertex(&v[1])?, qs.vertex(&v[2])?])
+    out.resize(host.prims.len(), blank);
+    let parts: Vec<Result<Quantizers>> = out
+        .par_chunks_mut(CHUNK)
+        .zip(host.prims.par_chunks(CHUNK))
+        .map(|(out, prims)| {
+            let mut qs = new();
+            for (o, p) in out.iter_mut().zip(prims) {
+                *o = qs.prim(p)?;
             }
-            Primitive::Line { a, b, width } => QPrim::Line {
-                a: qs.vertex(a)?,
-                b: qs.vertex(b)?,
-                width: qs.length(*width),
-            },
-            Primitive::Point { v, size } => QPrim::Point {
-                v: qs.vertex(v)?,
-                size: qs.length(*size),
-            },
-        });
+            Ok(qs)
+        })
+        .collect();
+    let mut qs = new();
+    for part in parts {
+        qs.merge(&part?);
     }
     Ok(Quantized {
         prims: out,
         local: std::mem::take(&mut qs.local).finish(),
         signals: [qs.x, qs.y, qs.z].into_iter().chain(qs.i).collect(),
-        vertices,
+        vertices: host.prims.iter().map(|p| u64::from(vertices_of(p))).sum(),
     })
 }
 

@@ -169,6 +169,15 @@ impl LocalError {
         self.max_abs_lsb = self.max_abs_lsb.max(d.abs());
         self.mean_lsb += d; // summed; divided in `finish`
     }
+    /// Adds another part's values (before [`LocalError::finish`]).
+    pub fn merge(&mut self, o: &Self) {
+        self.values += o.values;
+        self.identical += o.identical;
+        self.max_abs_lsb = self.max_abs_lsb.max(o.max_abs_lsb);
+        self.mean_lsb += o.mean_lsb;
+        self.mismatched_items += o.mismatched_items;
+    }
+
     /// Turns the running sum into a mean.
     pub fn finish(mut self) -> Self {
         if self.values > 0 {
