@@ -9,6 +9,7 @@
 //! [`Pool::recycle`]. A one-shot run uses an empty pool, which only allocates.
 
 use super::{Memo, Taps};
+use rayon::prelude::*;
 use std::any::{Any, TypeId};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -117,10 +118,16 @@ impl Pool {
             .unwrap_or_default()
     }
 
-    /// A buffer of `n` copies of `value` (as `vec![value; n]`).
+    /// A buffer of `n` copies of `value` (as `vec![value; n]`), filled on the threads when
+    /// it is large (a frame's plane).
     pub fn filled<T: Clone + Send + 'static>(&self, n: usize, value: T) -> Vec<T> {
+        const PARALLEL: usize = 1 << 16;
         let mut v = self.take(n);
-        v.resize(n, value);
+        if n >= PARALLEL {
+            v.par_extend(rayon::iter::repeat_n(value, n));
+        } else {
+            v.resize(n, value);
+        }
         v
     }
 
@@ -254,6 +261,14 @@ mod tests {
         assert!(pool.take::<u16>(10).capacity() >= 10);
         pool.give(w);
         assert_eq!(pool.len(), 1);
+        // A frame-sized buffer (filled on the threads) over a kept one's old elements.
+        let mut big = pool.filled(300_000, 5u64);
+        big[1000] = 6;
+        let at = big.as_ptr();
+        pool.give(big);
+        let big = pool.filled(250_000, 0u64);
+        assert_eq!(big, vec![0u64; 250_000]);
+        assert_eq!(big.as_ptr(), at);
     }
 
     #[test]
