@@ -41,7 +41,10 @@ impl RowSums {
         y: usize,
         class: &[u8],
     ) {
-        for_runs(class, uniform::MIXED, |xa, xb| {
+        for_runs(class, |k, xa, xb| {
+            if k != uniform::MIXED {
+                return;
+            }
             if self.is_wide {
                 let o = &mut self.wide;
                 fast::vsum_row(c, planes, dim, y, (xa, xb), (&mut o.0, &mut o.1, &mut o.2));
@@ -55,18 +58,19 @@ impl RowSums {
     /// The horizontal sums of one row (`planes`) at every position whose row window
     /// (`class`) is not [`uniform::FULL`].
     pub(super) fn hfill<P: Plane>(&mut self, c: &[P], planes: (&[P], &[P], &[P]), class: &[u8]) {
-        for k in [uniform::MIXED, uniform::ZERO] {
+        for_runs(class, |k, xa, xb| {
+            if k == uniform::FULL {
+                return;
+            }
             let zero = k == uniform::ZERO;
-            for_runs(class, k, |xa, xb| {
-                if self.is_wide {
-                    let o = &mut self.wide;
-                    fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
-                } else {
-                    let o = &mut self.narrow;
-                    fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
-                }
-            });
-        }
+            if self.is_wide {
+                let o = &mut self.wide;
+                fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
+            } else {
+                let o = &mut self.narrow;
+                fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
+            }
+        });
     }
 
     pub(super) fn get(&self, x: usize) -> (u128, u128, u128) {
@@ -79,19 +83,15 @@ impl RowSums {
     }
 }
 
-/// `f(xa, xb)` for every maximal run `xa..xb` of `class` equal to `k`.
-fn for_runs(class: &[u8], k: u8, mut f: impl FnMut(usize, usize)) {
+/// `f(k, xa, xb)` for every maximal run `xa..xb` of one class `k` in `class`, in one scan.
+fn for_runs(class: &[u8], mut f: impl FnMut(u8, usize, usize)) {
     let mut x = 0;
     while x < class.len() {
-        if class[x] != k {
-            x += 1;
-            continue;
-        }
-        let xa = x;
+        let (k, xa) = (class[x], x);
         while x < class.len() && class[x] == k {
             x += 1;
         }
-        f(xa, x);
+        f(k, xa, x);
     }
 }
 
