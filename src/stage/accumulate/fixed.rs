@@ -7,7 +7,7 @@ use super::points::{PointFrags, point_weights};
 use super::span::{self, Build, Dst, Scratch, Span};
 use super::window::{ProductStats, WindowSums, sums_fit_u32};
 use crate::error::{Error, Result};
-use crate::fixed::{Overflow, Quantizer, SignalStats, round_shift_i64};
+use crate::fixed::{Overflow, Quantizer, RoundShift, SignalStats, round_shift_i64};
 use crate::stage::visibility::{BACKGROUND, Samples};
 use crate::stage::{Pool, Region};
 use rayon::prelude::*;
@@ -95,45 +95,10 @@ impl AccParams {
         }
     }
 
-    /// [`AccParams::product`] recording into a row's [`ProductStats`] (the same values:
-    /// the exact value is scaled by `2^-sh` with a multiplication, exact like the division
-    /// by `2^sh`).
-    #[inline(always)]
-    pub(super) fn product_row(&self, sum: i64, stats: &mut ProductStats) -> i64 {
-        let sh = self.shift();
-        if sh <= 0 {
-            let v = ((sum as i128) << (-sh)) as i64;
-            stats.record(v as f64, v);
-            v
-        } else {
-            let r = round_shift_i64(sum, sh as u32, self.frame.quant);
-            // 2^-sh from its exponent bits (0 < sh < 63).
-            let scale = f64::from_bits((1023 - sh as u64) << 52);
-            stats.record(sum as f64 * scale, r);
-            r
-        }
-    }
-
     /// Frame-memory add with the overflow mode.
     #[inline]
     pub(super) fn add(&self, acc: i64, part: i64, overflows: &mut u64) -> Result<i64> {
         add_in(&self.frame, "accumulate.frame", acc, part, overflows)
-    }
-
-    /// A pixel's add: into the signed accumulator `accq` of a signed kernel
-    /// ([`Kernel::accumulator`], which the sums cannot overflow), else into the frame word.
-    #[inline]
-    pub(super) fn sum_add(
-        &self,
-        accq: Option<&Quantizer>,
-        acc: i64,
-        part: i64,
-        overflows: &mut u64,
-    ) -> Result<i64> {
-        match accq {
-            Some(q) => add_in(q, "accumulate.acc", acc, part, overflows),
-            None => self.add(acc, part, overflows),
-        }
     }
 
     /// A pixel's end: a signed kernel's accumulator clamped to the frame word with its
@@ -210,6 +175,102 @@ fn add_in(q: &Quantizer, signal: &str, acc: i64, part: i64, overflows: &mut u64)
         }
     }
     Ok(r.code)
+}
+
+/// The arithmetic of a pixel's fragments with its constants taken once per row: each
+/// window sum rounded to the frame format ([`AccParams::product`], the same codes and
+/// statistics) and added with the overflow mode, into the signed accumulator of a signed
+/// kernel ([`Kernel::accumulator`], which the sums cannot overflow), else into the frame
+/// word.
+pub(super) struct FragMath<'a> {
+    p: &'a AccParams,
+    /// The quantiser of the adds: the signed accumulator's when `signed_acc`, else the
+    /// frame word's.
+    add: Quantizer,
+    signed_acc: bool,
+    /// The add's results that need no overflow handling.
+    lo: i64,
+    hi: i64,
+    /// Bits dropped by the rounding (negative: shift left), and the rounding when positive.
+    sh: i32,
+    round: Option<RoundShift>,
+}
+
+impl<'a> FragMath<'a> {
+    /// The arithmetic of `p`.
+    pub fn new(p: &'a AccParams) -> Self {
+        let accq = p.kernel.accumulator(&p.frame);
+        let add = accq.unwrap_or(p.frame);
+        let f = &add.format;
+        // SatSym maps a signed format's smallest code to its negation: that code takes the
+        // overflow path.
+        let sym = add.overflow == Overflow::SatSym && f.signed;
+        let sh = p.shift();
+        Self {
+            p,
+            add,
+            signed_acc: accq.is_some(),
+            lo: f.min_code() + i64::from(sym),
+            hi: f.max_code(),
+            sh,
+            round: (sh > 0).then(|| RoundShift::new(sh as u32, p.frame.quant)),
+        }
+    }
+
+    /// The statistics of a row of at most `width` pixels: the rounding errors summed as
+    /// integers where every partial sum of the float recording is exact (see
+    /// [`ProductStats`]).
+    pub fn stats(&self, width: usize) -> ProductStats {
+        let k = &self.p.kernel;
+        // |sum| <= max(pos, neg) * I_max must convert to f64 exactly, and a row of at most
+        // width * size^2 errors, each below 2^sh in magnitude, must keep its sum of
+        // squares below 2^53 (so every partial sum of the float recording is exact too).
+        let sums = k.pos.max(k.neg) as u128 * u128::from(self.p.i_max);
+        let count = (width * k.size * k.size) as u128;
+        let exact = (1..=15).contains(&self.sh)
+            && sums < 1 << 53
+            && count << (2 * self.sh as u32) < 1 << 53;
+        ProductStats::new(exact.then_some(self.sh as u32))
+    }
+
+    /// The frame code of a pixel from its fragments' window sums, counting overflows and
+    /// clamps into `w`.
+    #[inline(always)]
+    pub fn pixel(
+        &self,
+        frags: &[(u32, i64)],
+        stats: &mut ProductStats,
+        w: &mut AccWork,
+    ) -> Result<u32> {
+        let mut acc = 0i64;
+        for &(_, sum) in frags {
+            let part = match self.round {
+                Some(r) => {
+                    let v = r.apply(sum);
+                    stats.record_rounding(v, sum, self.sh as u32);
+                    v
+                }
+                None => {
+                    let v = ((sum as i128) << (-self.sh)) as i64;
+                    stats.record(v as f64, v);
+                    v
+                }
+            };
+            let v = acc as i128 + part as i128;
+            acc = if v >= i128::from(self.lo) && v <= i128::from(self.hi) {
+                v as i64
+            } else {
+                let name = if self.signed_acc {
+                    "accumulate.acc"
+                } else {
+                    "accumulate.frame"
+                };
+                add_in(&self.add, name, acc, part, &mut w.overflows)?
+            };
+        }
+        let accq = self.signed_acc.then_some(&self.add);
+        self.p.finish(accq, acc, w)
+    }
 }
 
 /// Nearest depth code and covered-sample count of a pixel's own `n x n` samples, given the
@@ -317,6 +378,7 @@ pub(super) fn accumulate_build(
         avx2: span::has_avx2(),
     });
     let w = width as usize;
+    let math = FragMath::new(p);
     let acc_rows = region_rows(&mut frame.acc, region, w);
     let depth_rows = region_rows(&mut frame.depth, region, w);
     let cov_rows = region_rows(&mut frame.coverage, region, w);
@@ -335,7 +397,8 @@ pub(super) fn accumulate_build(
             let mut sc = Scratch {
                 win: WindowSums::new(k),
                 ids: Vec::new(),
-                stats: ProductStats::new(),
+                stats: math.stats((region.x1 - region.x0) as usize),
+                own: (Vec::new(), Vec::new()),
             };
             let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
             // Spans of pixels in one tile column: binned or not (no division per pixel).
@@ -358,6 +421,7 @@ pub(super) fn accumulate_build(
                 let sp = Span {
                     s,
                     p,
+                    math: &math,
                     r0,
                     xa,
                     xb,

@@ -9,7 +9,7 @@
 //! codes and statistics (`tests/accumulate.rs` compares them with the straightforward
 //! model).
 
-use super::fixed::{AccParams, RowOut};
+use super::fixed::{AccParams, FragMath, RowOut};
 use super::window::{ProductStats, WindowSums, Word, block_ids_n};
 use crate::error::Result;
 use crate::stage::visibility::{BACKGROUND, Samples};
@@ -19,6 +19,7 @@ use crate::stage::visibility::{BACKGROUND, Samples};
 pub(super) struct Span<'a> {
     pub s: &'a Samples,
     pub p: &'a AccParams,
+    pub math: &'a FragMath<'a>,
     pub r0: usize,
     pub xa: u32,
     pub xb: u32,
@@ -37,6 +38,9 @@ pub(super) struct Scratch {
     pub win: WindowSums,
     pub ids: Vec<u64>,
     pub stats: ProductStats,
+    /// Per sample column of a span: the nearest covered depth and the covered count of
+    /// its pixels' own samples.
+    pub own: (Vec<u32>, Vec<u32>),
 }
 
 /// How the window sums are computed: in `u32` (every sum provably fits) or `u64`, and in
@@ -117,16 +121,10 @@ fn pixels<const N: usize, const B: usize, W: Word>(
     block_ids_n::<N, B>(&s.prim, first, sw, npx, &mut sc.ids);
     let cols = npx + B - 1;
     let macs = (N * B * N * B) as u64;
-    let accq = k.accumulator(&p.frame);
     for gx in 0..npx {
         let base = first + gx * N;
         sc.win
             .sum_nb::<N, B, W>(&s.prim, &s.i, &k.w, base, sw, &sc.ids, gx, cols);
-        let mut acc = 0i64;
-        for &(_, sum) in &sc.win.frags {
-            let part = p.product_row(sum, &mut sc.stats);
-            acc = p.sum_add(accq.as_ref(), acc, part, &mut out.work.overflows)?;
-        }
         let nf = sc.win.frags.len() as u64;
         out.work.pixels += 1;
         out.work.macs += macs;
@@ -134,30 +132,52 @@ fn pixels<const N: usize, const B: usize, W: Word>(
         if let Some(c) = sp.tc {
             out.tile_rmw[c] += nf;
         }
-        dst.acc[gx] = p.finish(accq.as_ref(), acc, &mut out.work)?;
+        dst.acc[gx] = sp.math.pixel(&sc.win.frags, &mut sc.stats, &mut out.work)?;
     }
     // Depth and coverage of each pixel's own `N x N` samples: the span's own blocks lie
-    // side by side in `N` sample rows, so each row is one pass.
+    // side by side in `N` sample rows. Each sample row is folded into per-column minima
+    // and counts (a straight pass over `npx * N` samples), then each pixel's `N` columns
+    // are reduced.
     let own = first + k.off as usize * sw + k.off as usize;
-    dst.depth.fill(u32::MAX);
-    dst.cov.fill(0);
+    own_depth_coverage::<N>(&s.prim, &s.z, own, sw, npx, &mut sc.own, dst);
+    Ok(())
+}
+
+/// The nearest depth and covered-sample count of each of `npx` pixels whose own `N x N`
+/// samples lie side by side from buffer index `own` (row stride `sw`), into `dst`;
+/// `cols` is scratch of per-column `(depth, count)` partials.
+#[inline(always)]
+fn own_depth_coverage<const N: usize>(
+    prim: &[u32],
+    z: &[u32],
+    own: usize,
+    sw: usize,
+    npx: usize,
+    cols: &mut (Vec<u32>, Vec<u32>),
+    dst: Dst,
+) {
+    let len = npx * N;
+    let (zc, cc) = cols;
+    zc.clear();
+    zc.resize(len, u32::MAX);
+    cc.clear();
+    cc.resize(len, 0);
     for sy in 0..N {
         let row = own + sy * sw;
-        let ps = &s.prim[row..row + npx * N];
-        let zs = &s.z[row..row + npx * N];
-        let blocks = ps.chunks_exact(N).zip(zs.chunks_exact(N));
-        for ((d, c), (pb, zb)) in dst.depth.iter_mut().zip(dst.cov.iter_mut()).zip(blocks) {
-            let (mut zmin, mut cov) = (u32::MAX, 0u16);
-            for t in 0..N {
-                let covered = pb[t] != BACKGROUND;
-                cov += u16::from(covered);
-                zmin = zmin.min(if covered { zb[t] } else { u32::MAX });
-            }
-            *d = (*d).min(zmin);
-            *c += cov;
+        let (ps, zs) = (&prim[row..row + len], &z[row..row + len]);
+        for (((zm, c), &p), &zv) in zc.iter_mut().zip(cc.iter_mut()).zip(ps).zip(zs) {
+            let covered = p != BACKGROUND;
+            *c += u32::from(covered);
+            *zm = (*zm).min(if covered { zv } else { u32::MAX });
         }
     }
-    Ok(())
+    let px = dst.depth.iter_mut().zip(dst.cov.iter_mut());
+    for ((d, c), (zb, cb)) in px.zip(zc.chunks_exact(N).zip(cc.chunks_exact(N))) {
+        let zb: &[u32; N] = zb.try_into().expect("N columns");
+        let cb: &[u32; N] = cb.try_into().expect("N columns");
+        *d = zb.iter().fold(u32::MAX, |a, &b| a.min(b));
+        *c = cb.iter().sum::<u32>() as u16;
+    }
 }
 
 /// The run-time AVX2 build of [`pixels`].
