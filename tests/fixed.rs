@@ -757,10 +757,11 @@ fn qformat_bad_strings() {
     assert!(QFormat::new(false, u32::MAX, 2).validate().is_err());
 }
 
-/// The i64 fast path rounds exactly like the i128 reference, for every mode.
+/// The i64 fast path (and its non-negative u64 form) rounds exactly like the i128
+/// reference, for every mode.
 #[test]
 fn round_shift_i64_equals_round_shift() {
-    use igemu::fixed::{Quant, round_shift, round_shift_i64};
+    use igemu::fixed::{Quant, RoundShift, round_shift, round_shift_i64};
     for q in Quant::ALL {
         for shift in 0..12u32 {
             for raw in -5000i64..5000 {
@@ -768,6 +769,22 @@ fn round_shift_i64_equals_round_shift() {
                     round_shift_i64(raw, shift, q) as i128,
                     round_shift(raw as i128, shift, q),
                     "{q} {shift} {raw}"
+                );
+                if raw >= 0 {
+                    assert_eq!(
+                        RoundShift::new(shift, q).apply_nonneg(raw as u64) as i128,
+                        round_shift(raw as i128, shift, q),
+                        "{q} {shift} {raw} in u64"
+                    );
+                }
+            }
+        }
+        for shift in [0u32, 1, 20, 40, 61, 62] {
+            for raw in [(1u64 << 62) - 1, 1 << 62, (1 << 40) + (1 << 39), 3 << 20] {
+                assert_eq!(
+                    RoundShift::new(shift, q).apply_nonneg(raw) as i128,
+                    round_shift(raw as i128, shift, q),
+                    "{q} {shift} {raw} in u64"
                 );
             }
         }

@@ -126,6 +126,15 @@ impl RoundShift {
         raw.wrapping_add(self.bias(raw)) >> self.shift
     }
 
+    /// [`RoundShift::apply`] for `0 <= raw <= 2^62` (so [`RoundShift::is_small`] holds),
+    /// in `u64`: the positive bias only, and logical shifts (a loop over such values
+    /// vectorises with 64-bit lanes, which have no arithmetic shift before AVX-512).
+    #[inline(always)]
+    pub fn apply_nonneg(&self, raw: u64) -> u64 {
+        let conv = self.conv as u64;
+        raw.wrapping_add(self.pos as u64 + ((raw >> self.shift) & conv)) >> self.shift
+    }
+
     /// The bias added to `raw` before the shift.
     #[inline(always)]
     fn bias(&self, raw: i64) -> i64 {

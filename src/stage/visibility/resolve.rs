@@ -44,11 +44,7 @@ pub fn resolve(
         if part.extra.is_empty()
             && let Some(k) = Kernel::of(r, codes, zc, 1)
         {
-            writes += if avx2 {
-                simd::grey_avx2(&k, prim, (z_buf, prim_buf, i_buf))
-            } else {
-                grey(&k, prim, (z_buf, prim_buf, i_buf))
-            };
+            writes += grey_build(&k, prim, (z_buf, prim_buf, i_buf), avx2);
             continue;
         }
         let extra = &mut part.extra;
@@ -81,6 +77,9 @@ struct Kernel {
     di: [i64; 3],
     raster: RoundShift,
     zbuf: RoundShift,
+    /// Every value of the run is non-negative (its two ends are: the values are linear),
+    /// so it rounds in `u64` ([`RoundShift::apply_nonneg`]).
+    nonneg: bool,
 }
 
 impl Kernel {
@@ -101,6 +100,7 @@ impl Kernel {
         if !(z_ok(r.z) && z_ok(ez)) {
             return None;
         }
+        let mut nonneg = r.z >= 0 && ez >= 0;
         for c in 0..channels {
             let ei = RunCodes::end(r.i[c], r.di[c], r.n)?;
             let i_ok = |v: i64| {
@@ -109,6 +109,7 @@ impl Kernel {
             if !(i_ok(r.i[c]) && i_ok(ei)) {
                 return None;
             }
+            nonneg &= r.i[c] >= 0 && ei >= 0;
         }
         Some(Self {
             z: r.z,
@@ -117,19 +118,42 @@ impl Kernel {
             di: r.di,
             raster,
             zbuf: zc.round,
+            nonneg,
         })
     }
 }
 
+/// [`grey`] in the build for `k` (non-negative or not) and the CPU (`avx2`).
+#[inline]
+fn grey_build(k: &Kernel, prim: u32, planes: Planes, avx2: bool) -> u64 {
+    match (avx2, k.nonneg) {
+        (true, true) => simd::grey_avx2::<true>(k, prim, planes),
+        (true, false) => simd::grey_avx2::<false>(k, prim, planes),
+        (false, true) => grey::<true>(k, prim, planes),
+        (false, false) => grey::<false>(k, prim, planes),
+    }
+}
+
 /// The depth test of kernel `k`'s samples into the planes `(z, prim, i)` (one per sample
-/// of the run): branch-free selects. Returns the writes.
+/// of the run): branch-free selects; `NONNEG`: the kernel's values are non-negative
+/// ([`Kernel::nonneg`]) and round in `u64`. Returns the writes.
 #[inline(always)]
-fn grey(k: &Kernel, prim: u32, (zb, pb, ib): (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
+fn grey<const NONNEG: bool>(k: &Kernel, prim: u32, (zb, pb, ib): Planes) -> u64 {
     let (mut z, mut i) = (k.z, k.i[0]);
     let mut writes = 0;
     for ((zb, pb), ib) in zb.iter_mut().zip(pb.iter_mut()).zip(ib.iter_mut()) {
-        let zv = k.zbuf.apply_small(k.raster.apply_small(z)) as u32;
-        let iv = k.raster.apply_small(i) as u32;
+        let (zv, iv) = if NONNEG {
+            let zr = k.raster.apply_nonneg(z as u64);
+            (
+                k.zbuf.apply_nonneg(zr) as u32,
+                k.raster.apply_nonneg(i as u64) as u32,
+            )
+        } else {
+            (
+                k.zbuf.apply_small(k.raster.apply_small(z)) as u32,
+                k.raster.apply_small(i) as u32,
+            )
+        };
         let win = zv < *zb;
         *zb = if win { zv } else { *zb };
         *pb = if win { prim } else { *pb };
@@ -171,7 +195,7 @@ type Planes<'a> = (&'a mut [u32], &'a mut [u32], &'a mut [u32]);
 
 #[cfg(target_arch = "x86_64")]
 mod simd {
-    use super::Kernel;
+    use super::{Kernel, Planes};
 
     pub fn avx2() -> bool {
         std::arch::is_x86_feature_detected!("avx2")
@@ -179,35 +203,35 @@ mod simd {
 
     /// [`super::grey`] compiled with AVX2; call only when [`avx2`] holds.
     #[inline]
-    pub fn grey_avx2(k: &Kernel, prim: u32, planes: (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
+    pub fn grey_avx2<const NONNEG: bool>(k: &Kernel, prim: u32, planes: Planes) -> u64 {
         #[target_feature(enable = "avx2")]
-        fn run(k: &Kernel, prim: u32, planes: (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
-            super::grey(k, prim, planes)
+        fn run<const NONNEG: bool>(k: &Kernel, prim: u32, planes: Planes) -> u64 {
+            super::grey::<NONNEG>(k, prim, planes)
         }
         debug_assert!(avx2());
         // SAFETY: `run` is safe code compiled with AVX2 enabled; `resolve` calls this only
         // after `avx2()` found the feature on this CPU.
-        unsafe { run(k, prim, planes) }
+        unsafe { run::<NONNEG>(k, prim, planes) }
     }
 }
 
 /// Other targets: the portable build only.
 #[cfg(not(target_arch = "x86_64"))]
 mod simd {
-    use super::Kernel;
+    use super::{Kernel, Planes};
 
     pub fn avx2() -> bool {
         false
     }
 
-    pub fn grey_avx2(k: &Kernel, prim: u32, planes: (&mut [u32], &mut [u32], &mut [u32])) -> u64 {
-        super::grey(k, prim, planes)
+    pub fn grey_avx2<const NONNEG: bool>(k: &Kernel, prim: u32, planes: Planes) -> u64 {
+        super::grey::<NONNEG>(k, prim, planes)
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{Kernel, grey, resolve, simd};
+    use super::{Kernel, grey_build, resolve, simd};
     use crate::fixed::{Quant, RoundShift};
     use crate::stage::Grid;
     use crate::stage::raster::{RasterParams, Run, RunCodes};
@@ -306,11 +330,7 @@ mod tests {
         for avx2 in [false, simd::avx2()] {
             let (mut zk, mut pk, mut ik) = (old[3..3 + n].to_vec(), vec![9u32; n], vec![7u32; n]);
             let planes = (&mut zk[..], &mut pk[..], &mut ik[..]);
-            let wk = if avx2 {
-                simd::grey_avx2(&k, 5, planes)
-            } else {
-                grey(&k, 5, planes)
-            };
+            let wk = grey_build(&k, 5, planes, avx2);
             assert_eq!(wk, writes);
             assert_eq!(
                 (&zk[..], &pk[..], &ik[..]),
