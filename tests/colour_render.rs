@@ -73,6 +73,19 @@ fn a_grey_scene_in_three_channels_gives_its_grey_codes_in_each() {
     // The report counts three intensity datapaths: the frame memory three times.
     let frame = |r: &Render| r.report.cycles.cost.storage_bits.get("accumulate").copied();
     assert_eq!(frame(&c), frame(&g).map(|b| 3 * b));
+    // One z-buffer in the emulator too: the channels' sample taps share the depth and id
+    // planes (not copies), each with its own intensity plane.
+    let vis = c
+        .taps(igemu::stage::StageId::Visibility)
+        .expect("visibility ran");
+    let s0 = &vis.fixed.samples().samples;
+    assert_eq!(vis.fixed.more_samples.len(), 2);
+    for more in &vis.fixed.more_samples {
+        let s = &more.samples;
+        assert!(std::sync::Arc::ptr_eq(&s.z, &s0.z), "depth plane shared");
+        assert!(std::sync::Arc::ptr_eq(&s.prim, &s0.prim), "id plane shared");
+        assert_ne!(s.i.as_ptr(), s0.i.as_ptr(), "own intensity plane");
+    }
 }
 
 #[test]

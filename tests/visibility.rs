@@ -107,7 +107,7 @@ fn z_conversion_rounds_with_the_configured_mode_and_counts_clamps() {
         let s = &step.outcome.taps.fixed.samples().samples;
         let zs: Vec<u32> =
             s.z.iter()
-                .zip(&s.prim)
+                .zip(s.prim.iter())
                 .filter(|(_, p)| **p == 1)
                 .map(|(z, _)| *z)
                 .collect();
@@ -146,8 +146,8 @@ fn check_buffer(s: &Scene, h: &HwConfig) -> Result<(u64, u64), TestCaseError> {
             }
         }
     }
-    prop_assert!(tap.samples.z == z, "depths");
-    prop_assert!(tap.samples.prim == id, "ids");
+    prop_assert!(*tap.samples.z == z, "depths");
+    prop_assert!(*tap.samples.prim == id, "ids");
     prop_assert!(tap.samples.i == int, "intensities");
     let points: Vec<(u32, Vec<u32>)> = prims
         .q
@@ -263,7 +263,7 @@ fn light_points_are_tested_against_the_finished_buffer_and_never_write() {
         .iter()
         .map(|&p| if p == 0 { 0 } else { p + 3 })
         .collect();
-    assert_eq!(a.samples.prim, shifted);
+    assert_eq!(*a.samples.prim, shifted);
     let frags = with.outcome.taps.fixed.frags();
     let counts: Vec<usize> = a.points.iter().map(|p| p.samples.len()).collect();
     let all: Vec<usize> = (0..3).map(|p| frags.count(p)).collect();

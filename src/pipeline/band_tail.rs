@@ -72,8 +72,8 @@ pub(super) fn join(
     let fixed = SampleTap {
         samples: Samples {
             reg: joined,
-            z: cat(ts.map(|s| s.z.as_slice()), skip, kept, &own.samples.z),
-            prim: cat(ts.map(|s| s.prim.as_slice()), skip, kept, &own.samples.prim),
+            z: cat(ts.map(|s| s.z.as_slice()), skip, kept, &own.samples.z).into(),
+            prim: cat(ts.map(|s| s.prim.as_slice()), skip, kept, &own.samples.prim).into(),
             i: cat(ts.map(|s| s.i.as_slice()), skip, kept, &own.samples.i),
         },
         points: join_points(
@@ -140,8 +140,8 @@ impl Tail {
         let fixed = SampleTap {
             samples: Samples {
                 reg,
-                z: s.z[skip..].to_vec(),
-                prim: s.prim[skip..].to_vec(),
+                z: s.z[skip..].to_vec().into(),
+                prim: s.prim[skip..].to_vec().into(),
                 i: s.i[skip..].to_vec(),
             },
             points: points(&self.fixed.points, skip),

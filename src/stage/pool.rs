@@ -198,8 +198,12 @@ impl Pool {
         }
         for a in samples {
             if let Ok(s) = Arc::try_unwrap(a) {
-                self.give(s.samples.z);
-                self.give(s.samples.prim);
+                // The depth and id planes are the channels' own only when the last one lets go.
+                for plane in [s.samples.z, s.samples.prim] {
+                    if let Ok(v) = Arc::try_unwrap(plane) {
+                        self.give(v);
+                    }
+                }
                 self.give(s.samples.i);
             }
         }

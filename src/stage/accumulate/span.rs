@@ -282,13 +282,17 @@ mod tests {
             };
             // Patches of 3x3 samples share one primitive, so windows hold one to a few.
             let sw = s.reg.width();
-            for (e, (p, i)) in s.prim.iter_mut().zip(s.i.iter_mut()).enumerate() {
+            let prim = std::sync::Arc::make_mut(&mut s.prim);
+            for (e, (p, i)) in prim.iter_mut().zip(s.i.iter_mut()).enumerate() {
                 let (r, c) = (e / sw / 3, e % sw / 3);
                 let h = (r as u64 * 7919 + c as u64 * 104_729) ^ 0x5bd1;
                 *p = (h % 5) as u32;
                 *i = (next() % 65_536) as u32;
             }
-            for (z, &p) in s.z.iter_mut().zip(&s.prim) {
+            for (z, &p) in std::sync::Arc::make_mut(&mut s.z)
+                .iter_mut()
+                .zip(s.prim.iter())
+            {
                 *z = if p == 0 {
                     u32::MAX
                 } else {

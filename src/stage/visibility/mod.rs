@@ -25,10 +25,6 @@ mod resolve;
 pub use float::{SamplesF, float_samples, point_visible_f64, resolve_f64};
 pub use resolve::resolve;
 
-/// Samples per task of the copies of the depth and id planes for a colour render's
-/// channels 1.. (256 KiB).
-const COPY_CHUNK: usize = 1 << 16;
-
 /// Primitive id of the background (samples no surface covered).
 pub const BACKGROUND: u32 = 0;
 
@@ -37,10 +33,12 @@ pub const BACKGROUND: u32 = 0;
 pub struct Samples {
     /// Region covered.
     pub reg: SampleRegion,
-    /// Depth codes (z-buffer format); `u32::MAX` is "nothing", behind every code.
-    pub z: Vec<u32>,
-    /// Winning primitive id (`index + 1`), `BACKGROUND` for none.
-    pub prim: Vec<u32>,
+    /// Depth codes (z-buffer format); `u32::MAX` is "nothing", behind every code. Shared
+    /// by the channels of a colour render.
+    pub z: Arc<Vec<u32>>,
+    /// Winning primitive id (`index + 1`), `BACKGROUND` for none. Shared by the channels of
+    /// a colour render.
+    pub prim: Arc<Vec<u32>>,
     /// Intensity codes (the background's code where no surface won).
     pub i: Vec<u32>,
 }
@@ -56,8 +54,8 @@ impl Samples {
         let n = reg.len();
         Self {
             reg,
-            z: pool.filled(n, u32::MAX),
-            prim: pool.filled(n, BACKGROUND),
+            z: pool.filled(n, u32::MAX).into(),
+            prim: pool.filled(n, BACKGROUND).into(),
             i: pool.filled(n, background_i),
         }
     }
@@ -68,8 +66,8 @@ impl Samples {
         let n = reg.len();
         Self {
             reg,
-            z: pool.scratch(n, 0),
-            prim: pool.scratch(n, 0),
+            z: pool.scratch(n, 0).into(),
+            prim: pool.scratch(n, 0).into(),
             i: pool.scratch(n, 0),
         }
     }
@@ -139,7 +137,9 @@ pub fn parts<'a>(
     } else {
         bounds
     };
-    let (mut z, mut prim, mut i) = (&mut buf.z[..], &mut buf.prim[..], &mut buf.i[..]);
+    // A buffer being resolved is its own (shared only once finished): no copy here.
+    let (z, prim) = (Arc::make_mut(&mut buf.z), Arc::make_mut(&mut buf.prim));
+    let (mut z, mut prim, mut i) = (&mut z[..], &mut prim[..], &mut buf.i[..]);
     let mut more: Vec<&mut [u32]> = extra.iter_mut().map(|e| &mut e[..]).collect();
     let mut out = Vec::with_capacity(bounds.len());
     let mut s0 = 0;
@@ -408,21 +408,14 @@ impl Stage for Visibility {
                 coding: SampleCoding::Linear,
             })
         };
-        // Channels 1.. share the depth and the winning primitive of every sample: copies,
-        // in chunks on the threads.
-        let copy = |src: &[u32]| {
-            let mut v = cx.pool.scratch(src.len(), 0);
-            v.par_chunks_mut(COPY_CHUNK)
-                .zip(src.par_chunks(COPY_CHUNK))
-                .for_each(|(d, s)| d.copy_from_slice(s));
-            v
-        };
+        // Channels 1.. share the depth and the winning primitive of every sample (the
+        // planes, not copies of them).
         let more: Vec<Samples> = extra
             .into_iter()
             .map(|i| Samples {
                 reg,
-                z: copy(&buf.z),
-                prim: copy(&buf.prim),
+                z: buf.z.clone(),
+                prim: buf.prim.clone(),
                 i,
             })
             .collect();
