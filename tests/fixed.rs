@@ -757,6 +757,38 @@ fn qformat_bad_strings() {
     assert!(QFormat::new(false, u32::MAX, 2).validate().is_err());
 }
 
+/// `RoundShift::raw_range` is the range of raw values whose rounding lies in the codes
+/// asked for, for every mode (brute force over small values and shifts).
+#[test]
+fn raw_range_holds_exactly_the_values_that_round_into_range() {
+    use igemu::fixed::{Quant, RoundShift};
+    for q in Quant::ALL {
+        for shift in 0..6u32 {
+            let r = RoundShift::new(shift, q);
+            for (lo, hi) in [(0, 0), (0, 5), (-3, 2), (4, 3), (-2, -1), (7, 40)] {
+                let got = r.raw_range(lo, hi);
+                let inside = |v: i64| (lo..=hi).contains(&r.apply(v));
+                let want: Vec<i64> = (-2000i64..2000).filter(|&v| inside(v)).collect();
+                match got {
+                    None => assert!(want.is_empty(), "{q} {shift} {lo}..={hi}"),
+                    Some((a, b)) => {
+                        assert!(inside(a) && inside(b), "{q} {shift} {lo}..={hi}: ends");
+                        assert!(!inside(a - 1) && !inside(b + 1), "{q} {shift}: widest");
+                        assert_eq!(
+                            want,
+                            (a..=b).filter(|&v| v.abs() < 2000).collect::<Vec<_>>()
+                        );
+                    }
+                }
+            }
+        }
+    }
+    // Ranges that reach the edges of the small values.
+    let r = RoundShift::new(4, Quant::RndConv);
+    assert_eq!(r.raw_range(i64::MIN, i64::MAX), Some((-(1 << 62), 1 << 62)));
+    assert_eq!(r.raw_range(1 << 60, i64::MAX), None);
+}
+
 /// The i64 fast path (and its non-negative u64 form) rounds exactly like the i128
 /// reference, for every mode.
 #[test]

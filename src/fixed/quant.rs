@@ -135,6 +135,31 @@ impl RoundShift {
         raw.wrapping_add(self.pos as u64 + ((raw >> self.shift) & conv)) >> self.shift
     }
 
+    /// The raw values `v` with `|v| <= 2^62` ([`RoundShift::is_small`]) whose rounding lies
+    /// in `lo..=hi`: one range, since every mode's rounding is monotonic (`None` if empty).
+    pub fn raw_range(&self, lo: i64, hi: i64) -> Option<(i64, i64)> {
+        const EDGE: i64 = 1 << 62;
+        let r = |v: i64| self.apply_small(v);
+        if lo > hi || r(EDGE) < lo || r(-EDGE) > hi {
+            return None;
+        }
+        // The smallest v with r(v) >= lo, and the largest with r(v) <= hi (the bounds in
+        // i128: the two edges are 2^63 apart).
+        let (mut a, mut b) = (-i128::from(EDGE), i128::from(EDGE));
+        while a < b {
+            let m = (a + b).div_euclid(2);
+            if r(m as i64) >= lo { b = m } else { a = m + 1 }
+        }
+        let first = a as i64;
+        let (mut a, mut b) = (-i128::from(EDGE), i128::from(EDGE));
+        while a < b {
+            let m = (a + b + 1).div_euclid(2);
+            if r(m as i64) <= hi { a = m } else { b = m - 1 }
+        }
+        let a = a as i64;
+        (first <= a).then_some((first, a))
+    }
+
     /// The bias added to `raw` before the shift.
     #[inline(always)]
     fn bias(&self, raw: i64) -> i64 {

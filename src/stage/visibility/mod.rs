@@ -23,7 +23,7 @@ use std::sync::Arc;
 mod float;
 mod resolve;
 pub use float::{SamplesF, float_samples, point_visible_f64, resolve_f64};
-pub use resolve::resolve;
+pub use resolve::{RunBounds, resolve};
 
 /// Primitive id of the background (samples no surface covered).
 pub const BACKGROUND: u32 = 0;
@@ -326,6 +326,7 @@ impl Stage for Visibility {
         // own band's fragments, surface by surface in primitive order; the counts are
         // integers summed in part order.
         let codes = &frags.codes;
+        let bounds = RunBounds::new(codes, &zc);
         let mut cut = parts(&mut buf, &mut extra, &frags.runs.bounds);
         // Parts without fragments (none when the raster's bands cover the region) are
         // cleared here.
@@ -343,7 +344,7 @@ impl Stage for Visibility {
                     let before = wk.tests;
                     resolve(
                         &data[sp.a..sp.b],
-                        codes,
+                        (codes, &bounds),
                         sp.prim + 1,
                         &zc,
                         &mut part,

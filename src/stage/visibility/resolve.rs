@@ -16,7 +16,7 @@ use crate::stage::raster::{Run, RunCodes};
 /// `extra[c]`); counts the tests, writes and clamps.
 pub fn resolve(
     runs: &[Run],
-    codes: &RunCodes,
+    (codes, bounds): (&RunCodes, &RunBounds),
     prim: u32,
     zc: &ZConvert,
     part: &mut Part,
@@ -35,14 +35,14 @@ pub fn resolve(
             &mut part.i[at..at + n],
         );
         if let [e1, e2] = &mut part.extra[..]
-            && let Some(k) = Kernel::of(r, codes, zc, 3)
+            && let Some(k) = Kernel::of(r, bounds, zc, 3)
         {
             let more = (&mut e1[at..at + n], &mut e2[at..at + n]);
             writes += rgb(&k, prim, (z_buf, prim_buf, i_buf), more);
             continue;
         }
         if part.extra.is_empty()
-            && let Some(k) = Kernel::of(r, codes, zc, 1)
+            && let Some(k) = Kernel::of(r, bounds, zc, 1)
         {
             writes += grey_build(&k, prim, (z_buf, prim_buf, i_buf), avx2);
             continue;
@@ -82,31 +82,48 @@ struct Kernel {
     nonneg: bool,
 }
 
-impl Kernel {
-    /// The kernel of `r`, if its end values show that no value of it clamps or overflows.
-    /// The kernel of `r` with `channels` intensities, if its end values show that no value
-    /// of it clamps or overflows.
-    fn of(r: &Run, codes: &RunCodes, zc: &ZConvert, channels: usize) -> Option<Self> {
+/// The raw start and end values of a run that take the fast kernels: those of depth
+/// whose raster code lies in `0..=z_max` and whose z-buffer code is in range, and those of
+/// each intensity whose code lies in `0..=i_max`. The roundings are monotonic, so each is
+/// one range of raw values (within [`RoundShift::is_small`]); found once per frame.
+#[derive(Clone, Copy, Debug)]
+pub struct RunBounds {
+    z: (i64, i64),
+    i: [(i64, i64); 3],
+    raster: RoundShift,
+}
+
+impl RunBounds {
+    /// The bounds of the raster's codes `codes` and the depth conversion `zc`.
+    pub fn new(codes: &RunCodes, zc: &ZConvert) -> Self {
+        const NONE: (i64, i64) = (1, 0);
         let raster = codes.rounding();
+        // The largest raster depth code the z-buffer's rounding keeps in range.
+        let z_top = zc
+            .round
+            .raw_range(i64::MIN, i64::from(zc.max))
+            .map(|(_, top)| top.min(codes.z_max()));
+        let z = z_top
+            .and_then(|top| raster.raw_range(0, top))
+            .unwrap_or(NONE);
+        let i = std::array::from_fn(|c| raster.raw_range(0, codes.i_max(c)).unwrap_or(NONE));
+        Self { z, i, raster }
+    }
+}
+
+impl Kernel {
+    /// The kernel of `r` with `channels` intensities, if its end values show that no value
+    /// of it clamps or overflows (`b`: the raw values that do not).
+    fn of(r: &Run, b: &RunBounds, zc: &ZConvert, channels: usize) -> Option<Self> {
+        let inside = |v: i64, (lo, hi): (i64, i64)| lo <= v && v <= hi;
         let ez = RunCodes::end(r.z, r.dz, r.n)?;
-        let z_ok = |v: i64| {
-            let c = raster.apply_small(v);
-            // The raster's depth code unclamped, and the z-buffer's code of it in range.
-            RoundShift::is_small(v)
-                && c >= 0
-                && c <= codes.z_max()
-                && zc.round.apply(c) <= i64::from(zc.max)
-        };
-        if !(z_ok(r.z) && z_ok(ez)) {
+        if !(inside(r.z, b.z) && inside(ez, b.z)) {
             return None;
         }
         let mut nonneg = r.z >= 0 && ez >= 0;
         for c in 0..channels {
             let ei = RunCodes::end(r.i[c], r.di[c], r.n)?;
-            let i_ok = |v: i64| {
-                RoundShift::is_small(v) && (0..=codes.i_max(c)).contains(&raster.apply_small(v))
-            };
-            if !(i_ok(r.i[c]) && i_ok(ei)) {
+            if !(inside(r.i[c], b.i[c]) && inside(ei, b.i[c])) {
                 return None;
             }
             nonneg &= r.i[c] >= 0 && ei >= 0;
@@ -116,7 +133,7 @@ impl Kernel {
             dz: r.dz,
             i: r.i,
             di: r.di,
-            raster,
+            raster: b.raster,
             zbuf: zc.round,
             nonneg,
         })
@@ -231,7 +248,7 @@ mod simd {
 
 #[cfg(test)]
 mod tests {
-    use super::{Kernel, grey_build, resolve, simd};
+    use super::{Kernel, RunBounds, grey_build, resolve, simd};
     use crate::fixed::{Quant, RoundShift};
     use crate::stage::Grid;
     use crate::stage::raster::{RasterParams, Run, RunCodes};
@@ -306,7 +323,8 @@ mod tests {
             extra,
         };
         let mut w = VisWork::default();
-        resolve(&[*r], codes, 5, zc, &mut part, &mut w);
+        let bounds = RunBounds::new(codes, zc);
+        resolve(&[*r], (codes, &bounds), 5, zc, &mut part, &mut w);
         assert_eq!(
             (w.tests, w.writes, w.clamped),
             (u64::from(r.n), writes, clamped)
@@ -323,7 +341,7 @@ mod tests {
         old: &[u32],
         (want, writes): ([Vec<u32>; 5], u64),
     ) {
-        let Some(k) = Kernel::of(r, codes, zc, 1) else {
+        let Some(k) = Kernel::of(r, &RunBounds::new(codes, zc), zc, 1) else {
             return;
         };
         let n = r.n as usize;
@@ -408,7 +426,7 @@ mod tests {
             let zv = zc.apply(f.z, &mut ignored);
             old[f.s as usize] = [0, zv, 1 << 20][j % 3];
         }
-        assert!(Kernel::of(&r, &codes, &zc, 1).is_some());
+        assert!(Kernel::of(&r, &RunBounds::new(&codes, &zc), &zc, 1).is_some());
         let got = check(&codes, &zc, &r, &old, 1);
         assert_eq!(
             got.1, 5,
@@ -416,19 +434,19 @@ mod tests {
         );
         check_kernel(&codes, &zc, &r, &old, got);
         let out = Run { z: -(1 << 20), ..r };
-        assert!(Kernel::of(&out, &codes, &zc, 1).is_none());
+        assert!(Kernel::of(&out, &RunBounds::new(&codes, &zc), &zc, 1).is_none());
         let (codes, zc) = setup(14, 2, 4, 3);
         let rgb = Run {
             i: [200 << 14, 100 << 14, 50 << 14],
             di: [1 << 12; 3],
             ..r
         };
-        assert!(Kernel::of(&rgb, &codes, &zc, 3).is_some());
+        assert!(Kernel::of(&rgb, &RunBounds::new(&codes, &zc), &zc, 3).is_some());
         check(&codes, &zc, &rgb, &old, 3);
         let dark = Run {
             i: [200 << 14, -(1 << 20), 50 << 14],
             ..rgb
         };
-        assert!(Kernel::of(&dark, &codes, &zc, 3).is_none());
+        assert!(Kernel::of(&dark, &RunBounds::new(&codes, &zc), &zc, 3).is_none());
     }
 }
