@@ -230,7 +230,7 @@ impl<'a> FragMath<'a> {
         let exact = (1..=15).contains(&self.sh)
             && sums < 1 << 53
             && count << (2 * self.sh as u32) < 1 << 53;
-        ProductStats::new(exact.then_some(self.sh as u32))
+        ProductStats::new(self.sh.max(0) as u32, exact)
     }
 
     /// The frame code of a pixel from its fragments' window sums, counting overflows and
@@ -247,7 +247,7 @@ impl<'a> FragMath<'a> {
             let part = match self.round {
                 Some(r) => {
                     let v = r.apply(sum);
-                    stats.record_rounding(v, sum, self.sh as u32);
+                    stats.record_rounding(v, sum);
                     v
                 }
                 None => {

@@ -294,7 +294,7 @@ pub(super) const MIXED: u64 = u64::MAX;
 ///
 /// A rounding that drops `sh` bits errs by `k * 2^-sh` for an integer `|k| < 2^sh`. Where
 /// every partial sum of those errors and of their squares stays below `2^53` units of
-/// `2^-sh` and `2^-2sh` (the caller's bound, [`ProductStats::new`] with `Some(sh)`), each
+/// `2^-sh` and `2^-2sh` (the caller's bound, [`ProductStats::new`] with `exact`), each
 /// float add is exact, so the float sums equal the integer sums of `k` and `k^2` scaled
 /// once at the end: the same bits, without a float add per value.
 pub(super) struct ProductStats {
@@ -303,22 +303,26 @@ pub(super) struct ProductStats {
     max: i64,
     err_sum: f64,
     err_sq_sum: f64,
-    /// `Some(sh)`: the errors are summed as integers in `k_sum` and `k_sq`.
-    exact: Option<u32>,
+    /// Bits the roundings recorded by [`ProductStats::record_rounding`] drop.
+    sh: u32,
+    /// The errors of those roundings are summed as integers in `k_sum` and `k_sq`.
+    exact: bool,
     k_sum: i64,
     k_sq: u64,
 }
 
 impl ProductStats {
-    /// Nothing recorded; `exact`: the errors of roundings by that many bits are summed
-    /// as integers (only where the caller proved every partial sum exact, see above).
-    pub fn new(exact: Option<u32>) -> Self {
+    /// Nothing recorded, for roundings that drop `sh` bits; `exact`: their errors are
+    /// summed as integers (only where the caller proved every partial sum exact, see
+    /// above).
+    pub fn new(sh: u32, exact: bool) -> Self {
         Self {
             count: 0,
             min: i64::MAX,
             max: i64::MIN,
             err_sum: 0.0,
             err_sq_sum: 0.0,
+            sh,
             exact,
             k_sum: 0,
             k_sq: 0,
@@ -336,12 +340,13 @@ impl ProductStats {
         self.err_sq_sum += e * e;
     }
 
-    /// Records `rounded`, the rounding of `sum * 2^-sh` (`0 < sh < 63`): as
-    /// [`ProductStats::record`] of `sum * 2^-sh` (a multiplication by the power of two,
-    /// exact like the division), in integers when the statistics were made for `sh`.
+    /// Records `rounded`, the rounding of `sum * 2^-sh` (`0 < sh < 63`, the statistics'
+    /// `sh`): as [`ProductStats::record`] of `sum * 2^-sh` (a multiplication by the power
+    /// of two, exact like the division), in integers when `exact`.
     #[inline(always)]
-    pub fn record_rounding(&mut self, rounded: i64, sum: i64, sh: u32) {
-        if self.exact.is_some() {
+    pub fn record_rounding(&mut self, rounded: i64, sum: i64) {
+        let sh = self.sh;
+        if self.exact {
             self.count += 1;
             self.min = self.min.min(rounded);
             self.max = self.max.max(rounded);
@@ -365,7 +370,8 @@ impl ProductStats {
         }
         s.err_sum = self.err_sum;
         s.err_sq_sum = self.err_sq_sum;
-        if let Some(sh) = self.exact {
+        if self.exact {
+            let sh = self.sh;
             // Exact conversions (below 2^53) and exact power-of-two scalings.
             s.err_sum = self.k_sum as f64 * f64::from_bits((1023 - u64::from(sh)) << 52);
             s.err_sq_sum = self.k_sq as f64 * f64::from_bits((1023 - 2 * u64::from(sh)) << 52);
@@ -397,11 +403,11 @@ mod tests {
             ),
         ) {
             let round = RoundShift::new(sh, Quant::ALL[q]);
-            let (mut int, mut float) = (ProductStats::new(Some(sh)), ProductStats::new(None));
+            let (mut int, mut float) = (ProductStats::new(sh, true), ProductStats::new(sh, false));
             for &s in &sums {
                 let v = round.apply(s);
-                int.record_rounding(v, s, sh);
-                float.record_rounding(v, s, sh);
+                int.record_rounding(v, s);
+                float.record_rounding(v, s);
             }
             let t = SignalStats::new("p", QFormat::new(true, 40, 0));
             let (a, b) = (int.into_stats(&t), float.into_stats(&t));
