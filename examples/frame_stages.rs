@@ -1,7 +1,7 @@
 //! Per-stage time of the fixed-only frame at steady state: `frames` frames of an embedded
-//! scene on one `fast::Emulator` (its pool keeps the planes across frames, as a sequence
+//! scene (or of a scene file) on one `fast::Emulator` (its pool keeps the planes across frames, as a sequence
 //! or `cargo bench --bench frame`'s `fixed-only` runs them), the first three dropped, the
-//! medians printed: each stage's fixed-model time, the whole frame's wall time, the sum of
+//! medians printed: the host front end's time, each stage's fixed-model time, the whole frame's wall time, the sum of
 //! the stages and the cycle simulation's own time.
 //!
 //! ```text
@@ -24,10 +24,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let name = args.first().map_or("default", String::as_str);
     let frames: usize = args.get(1).map_or(Ok(30), |s| s.parse())?;
     let hw = HwConfig::default_config();
-    let scene = Scene::embedded(name).ok_or_else(|| format!("no embedded scene {name:?}"))?;
+    // An embedded scene's name, or a scene file.
+    let scene = match Scene::embedded(name) {
+        Some(s) => s,
+        None => Scene::load(name)?,
+    };
     let emu = fast::Emulator::new();
     let mut stages: Vec<(String, Vec<f64>)> = Vec::new();
-    let (mut wall, mut fixed, mut sim) = (vec![], vec![], vec![]);
+    let (mut wall, mut fixed, mut sim, mut host) = (vec![], vec![], vec![], vec![]);
     for k in 0..frames.max(4) {
         let t = Instant::now();
         let e = emu.emulate(&scene, &hw, RunOptions::FIXED_ONLY, None)?;
@@ -36,6 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             wall.push(ms);
             fixed.push(e.report.timing.fixed_ms);
             sim.push(e.report.cycles.sim.wall_ms);
+            host.push(e.report.timing.host_ms);
             for (i, s) in e.report.stages.iter().enumerate() {
                 if stages.len() <= i {
                     stages.push((s.name.clone(), Vec::new()));
@@ -46,6 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         emu.recycle(e);
     }
     println!("{name}: medians of {} pooled frames (ms)", wall.len());
+    println!("  {:<12} {:>7.2}", "host", median(&mut host));
     for (stage, v) in &mut stages {
         println!("  {stage:<12} {:>7.2}", median(v));
     }

@@ -161,7 +161,9 @@ pub fn build_in(scene: &Scene, hw: &HwConfig, pool: &Pool) -> Result<Plan> {
     let guard = guard_band(scene, hw)?;
     let (decisions, order) = decide(scene, hw)?;
     let t = Instant::now();
-    let host = front_end_in(scene, &guard, None, pool.take(0));
+    let mut parts = pool.take_lists();
+    let host = front_end_in(scene, &guard, None, (pool.take(0), &mut parts));
+    pool.give(parts);
     let host_ms = ms_since(t);
     let grid = Grid::new(hw.raster.samples, hw.subpixel_bits(), width, height);
     let prints = input::footprints(&host, hw);

@@ -539,6 +539,23 @@ pub struct FrontEndStats {
     pub vertices: usize,
 }
 
+impl FrontEndStats {
+    /// Adds the counts of a part of the front end's work (`objects` and `vertices` are
+    /// counted once over the whole scene, not per part).
+    pub fn add(&mut self, o: &FrontEndStats) {
+        self.triangles_in += o.triangles_in;
+        self.culled_backfaces += o.culled_backfaces;
+        self.clipped_near += o.clipped_near;
+        self.clipped_far += o.clipped_far;
+        self.clipped_guard += o.clipped_guard;
+        self.dropped_outside += o.dropped_outside;
+        self.dropped_degenerate += o.dropped_degenerate;
+        self.triangles_out += o.triangles_out;
+        self.lines += o.lines;
+        self.points += o.points;
+    }
+}
+
 /// The front end's output: screen-space primitives for the pipeline.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HostScene {

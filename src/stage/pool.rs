@@ -72,6 +72,12 @@ impl Pool {
         v
     }
 
+    /// A kept list of lists as it was given back (its inner lists keep their buffers, for
+    /// work split in parts whose lists live across frames), else an empty one.
+    pub fn take_lists<T: Send + 'static>(&self) -> Vec<Vec<T>> {
+        self.pick(0).unwrap_or_default()
+    }
+
     /// A buffer of `n` elements for a kernel that overwrites every one of them: a kept
     /// buffer's old elements stay as they are (no fill pass over a frame-sized plane from
     /// the second frame on), only elements beyond its length are set to `value`.
