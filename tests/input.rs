@@ -547,3 +547,44 @@ fn chunked_quantisation_is_deterministic_and_keeps_scene_order() {
         }
     }
 }
+
+/// `input::footprints` of a scene of more primitives than a part (run on the threads)
+/// are each primitive's `input::footprint`, in scene order, on one thread and on two.
+#[test]
+fn footprints_of_many_primitives_keep_the_scene_order() {
+    let mut rng = Rng::new(0x5eed_f00d);
+    let mut prims = Vec::new();
+    for k in 0..9000 {
+        let v = |rng: &mut Rng| sv(rng.range(-8.0, 72.0), rng.range(-8.0, 56.0), 0.5, 0.5);
+        prims.push(match k % 50 {
+            0 => Primitive::Point {
+                v: v(&mut rng),
+                size: 3.0,
+            },
+            1 => Primitive::Line {
+                a: v(&mut rng),
+                b: v(&mut rng),
+                width: 1.5,
+            },
+            _ => Primitive::Triangle([v(&mut rng), v(&mut rng), v(&mut rng)]),
+        });
+    }
+    let h = HwConfig::default_config();
+    let apron = h.accumulate.filter.base() as i64 / 2 + 1;
+    let serial: Vec<_> = prims
+        .iter()
+        .map(|p| input::footprint(p, &h, apron))
+        .collect();
+    let hs = host(prims);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        assert_eq!(
+            pool.install(|| input::footprints(&hs, &h)),
+            serial,
+            "{threads} threads"
+        );
+    }
+}

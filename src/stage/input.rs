@@ -319,11 +319,19 @@ pub struct Footprint {
 }
 
 /// The [`Footprint`]s of the host's primitives with the configured filter's apron (a
-/// pixel's window reaches `base / 2 + 1` pixels beyond a sample).
+/// pixel's window reaches `base / 2 + 1` pixels beyond a sample), in their order: on the
+/// threads in parts of [`FOOTPRINT_PART`] primitives (a scene of fewer runs serially).
 pub fn footprints(host: &HostScene, hw: &HwConfig) -> Vec<Footprint> {
     let apron = hw.accumulate.filter.base() as i64 / 2 + 1;
-    host.prims.iter().map(|p| footprint(p, hw, apron)).collect()
+    host.prims
+        .par_iter()
+        .with_min_len(FOOTPRINT_PART)
+        .map(|p| footprint(p, hw, apron))
+        .collect()
 }
+
+/// Primitives per part of [`footprints`] on the threads.
+const FOOTPRINT_PART: usize = 4096;
 
 /// The [`Footprint`] of a host primitive with a filter reaching `apron` pixels beyond a
 /// sample.
