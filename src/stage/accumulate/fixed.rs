@@ -387,57 +387,62 @@ pub(super) fn accumulate_build(
         .zip(depth_rows)
         .zip(cov_rows)
         .enumerate()
-        .map(|(j, ((acc_row, depth_row), cov_row))| {
-            let py = region.y0 + j as u32;
-            let mut out = RowOut {
-                stats: SignalStats::new("accumulate.product", p.frame.format),
-                work: AccWork::default(),
-                tile_rmw: vec![0; tiles.map_or(0, |t| t.cols as usize)],
-            };
-            let mut sc = Scratch {
+        // A task's rows are consecutive and in order: its scratch keeps each span's block
+        // ids for the next row (`BlockIds`; the same ids whatever the tasks).
+        .map_init(
+            || Scratch {
                 win: WindowSums::new(k),
                 ids: Vec::new(),
                 stats: math.stats((region.x1 - region.x0) as usize),
                 own: (Vec::new(), Vec::new()),
-            };
-            let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
-            // Spans of pixels in one tile column: binned or not (no division per pixel).
-            // Untouched tiles keep the background the frame starts with.
-            let spans: Vec<(u32, u32, Option<usize>)> = match tiles {
-                None => vec![(region.x0, region.x1, None)],
-                Some(t) => {
-                    let row0 = (py / t.size * t.cols) as usize;
-                    (region.x0 / t.size..region.x1.div_ceil(t.size))
-                        .filter(|&tc| t.touched[row0 + tc as usize])
-                        .map(|tc| {
-                            let a = (tc * t.size).max(region.x0);
-                            let b = ((tc + 1) * t.size).min(region.x1);
-                            (a, b, Some(tc as usize))
-                        })
-                        .collect()
+            },
+            |sc, (j, ((acc_row, depth_row), cov_row))| {
+                let py = region.y0 + j as u32;
+                let mut out = RowOut {
+                    stats: SignalStats::new("accumulate.product", p.frame.format),
+                    work: AccWork::default(),
+                    tile_rmw: vec![0; tiles.map_or(0, |t| t.cols as usize)],
+                };
+                let r0 = (py as i64 * k.n as i64 - k.off - s.reg.k0) as usize;
+                // Spans of pixels in one tile column: binned or not (no division per pixel).
+                // Untouched tiles keep the background the frame starts with.
+                let spans: Vec<(u32, u32, Option<usize>)> = match tiles {
+                    None => vec![(region.x0, region.x1, None)],
+                    Some(t) => {
+                        let row0 = (py / t.size * t.cols) as usize;
+                        (region.x0 / t.size..region.x1.div_ceil(t.size))
+                            .filter(|&tc| t.touched[row0 + tc as usize])
+                            .map(|tc| {
+                                let a = (tc * t.size).max(region.x0);
+                                let b = ((tc + 1) * t.size).min(region.x1);
+                                (a, b, Some(tc as usize))
+                            })
+                            .collect()
+                    }
+                };
+                for (xa, xb, tc) in spans {
+                    let sp = Span {
+                        s,
+                        p,
+                        math: &math,
+                        r0,
+                        xa,
+                        xb,
+                        tc,
+                    };
+                    let (a, b) = ((xa - region.x0) as usize, (xb - region.x0) as usize);
+                    let dst = Dst {
+                        acc: &mut acc_row[a..b],
+                        depth: &mut depth_row[a..b],
+                        cov: &mut cov_row[a..b],
+                    };
+                    span::run(&sp, sc, dst, &mut out, build)?;
                 }
-            };
-            for (xa, xb, tc) in spans {
-                let sp = Span {
-                    s,
-                    p,
-                    math: &math,
-                    r0,
-                    xa,
-                    xb,
-                    tc,
-                };
-                let (a, b) = ((xa - region.x0) as usize, (xb - region.x0) as usize);
-                let dst = Dst {
-                    acc: &mut acc_row[a..b],
-                    depth: &mut depth_row[a..b],
-                    cov: &mut cov_row[a..b],
-                };
-                span::run(&sp, &mut sc, dst, &mut out, build)?;
-            }
-            out.stats = sc.stats.into_stats(&template);
-            Ok(out)
-        })
+                let row_stats = math.stats((region.x1 - region.x0) as usize);
+                out.stats = std::mem::replace(&mut sc.stats, row_stats).into_stats(&template);
+                Ok(out)
+            },
+        )
         .collect();
     let mut work = AccWork::default();
     let mut stats = SignalStats::new("accumulate.product", p.frame.format);

@@ -10,7 +10,7 @@
 //! model).
 
 use super::fixed::{AccParams, FragMath, RowOut};
-use super::window::{ProductStats, WindowSums, Word, block_ids_n};
+use super::window::{BlockIds, ProductStats, WindowSums, Word};
 use crate::error::Result;
 use crate::stage::visibility::{BACKGROUND, Samples};
 
@@ -33,10 +33,12 @@ pub(super) struct Dst<'a> {
     pub cov: &'a mut [u16],
 }
 
-/// The scratch a row reuses for its spans.
+/// The scratch a task reuses for its rows' spans.
 pub(super) struct Scratch {
     pub win: WindowSums,
-    pub ids: Vec<u64>,
+    /// Per tile column (one slot without tiles): its span's block ids, kept for the same
+    /// span on the next row.
+    pub ids: Vec<BlockIds>,
     pub stats: ProductStats,
     /// Per sample column of a span: the nearest covered depth and the covered count of
     /// its pixels' own samples.
@@ -118,13 +120,18 @@ fn pixels<const N: usize, const B: usize, W: Word>(
     let sw = s.reg.width();
     let npx = (sp.xb - sp.xa) as usize;
     let first = sp.r0 * sw + (sp.xa as i64 * N as i64 - k.off - s.reg.c0) as usize;
-    block_ids_n::<N, B>(&s.prim, first, sw, npx, &mut sc.ids);
+    let slot = sp.tc.unwrap_or(0);
+    if sc.ids.len() <= slot {
+        sc.ids.resize_with(slot + 1, BlockIds::default);
+    }
+    let ids = &mut sc.ids[slot];
+    ids.find::<N, B>(&s.prim, first, sw, npx);
     let cols = npx + B - 1;
     let macs = (N * B * N * B) as u64;
     for gx in 0..npx {
         let base = first + gx * N;
         sc.win
-            .sum_nb::<N, B, W>(&s.prim, &s.i, &k.w, base, sw, &sc.ids, gx, cols);
+            .sum_nb::<N, B, W>(&s.prim, &s.i, &k.w, base, sw, &ids.ids, gx, cols);
         let nf = sc.win.frags.len() as u64;
         out.work.pixels += 1;
         out.work.macs += macs;

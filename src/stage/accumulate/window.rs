@@ -249,11 +249,54 @@ impl<'a, const N: usize, const B: usize> Window<'a, N, B> {
 /// Lanes of a window pass's partial results (one AVX2 register of 32-bit values).
 const LANES: usize = 8;
 
+/// The block ids of one span's windows (see [`block_ids_n`]), kept for the span of the
+/// same pixels on the next pixel row: its windows start `N` sample rows lower, so their
+/// first `B - 1` block rows are this row's last `B - 1`.
+#[derive(Debug, Default)]
+pub(super) struct BlockIds {
+    /// `ids[by * cols + g]` (see [`block_ids_n`]).
+    pub ids: Vec<u64>,
+    /// The buffer index of the first window and the pixels they were found for (`None`:
+    /// none yet).
+    at: Option<(usize, usize)>,
+}
+
+impl BlockIds {
+    /// The block ids of the windows of `pixels` pixels whose first window starts at buffer
+    /// index `base` (row stride `sw`): the last `B - 1` block rows of the previous call
+    /// moved up when it was the same span one pixel row higher, and only the rows not
+    /// found yet scanned. The same values as [`block_ids_n`] every time.
+    #[inline(always)]
+    pub fn find<const N: usize, const B: usize>(
+        &mut self,
+        prim: &[u32],
+        base: usize,
+        sw: usize,
+        pixels: usize,
+    ) {
+        let cols = pixels + B - 1;
+        let kept = if B > 1
+            && self
+                .at
+                .is_some_and(|(b, p)| p == pixels && b + N * sw == base)
+        {
+            self.ids.copy_within(cols.., 0);
+            B - 1
+        } else {
+            self.ids.clear();
+            self.ids.resize(B * cols, MIXED);
+            0
+        };
+        block_rows_n::<N, B>(prim, base, sw, pixels, kept, &mut self.ids);
+        self.at = Some((base, pixels));
+    }
+}
+
 /// The ids of the `n x n` blocks (`n = N`) of the windows of `pixels` pixels of one pixel
 /// row: `ids[by * cols + g]` is the primitive owning all samples of block row `by`, block
 /// column `g` (pixel `g - bx` of the span sees it as its block `bx`), or [`MIXED`] when the
 /// block crosses an edge. `base` is the buffer index of the span's first window.
-#[inline(always)]
+#[cfg(test)]
 pub(super) fn block_ids_n<const N: usize, const B: usize>(
     prim: &[u32],
     base: usize,
@@ -261,10 +304,23 @@ pub(super) fn block_ids_n<const N: usize, const B: usize>(
     pixels: usize,
     ids: &mut Vec<u64>,
 ) {
-    let cols = pixels + B - 1;
     ids.clear();
-    ids.resize(B * cols, MIXED);
-    for (by, out) in ids.chunks_exact_mut(cols).enumerate() {
+    ids.resize(B * (pixels + B - 1), MIXED);
+    block_rows_n::<N, B>(prim, base, sw, pixels, 0, ids);
+}
+
+/// Block rows `from..B` of [`block_ids_n`] into `ids` (sized `B * cols`).
+#[inline(always)]
+fn block_rows_n<const N: usize, const B: usize>(
+    prim: &[u32],
+    base: usize,
+    sw: usize,
+    pixels: usize,
+    from: usize,
+    ids: &mut [u64],
+) {
+    let cols = pixels + B - 1;
+    for (by, out) in ids.chunks_exact_mut(cols).enumerate().skip(from) {
         let r0 = base + by * N * sw;
         let end = r0 + (N - 1) * sw + cols * N;
         let band = &prim[r0..end];
@@ -382,9 +438,55 @@ impl ProductStats {
 
 #[cfg(test)]
 mod tests {
-    use super::ProductStats;
+    use super::{BlockIds, ProductStats, block_ids_n};
     use crate::fixed::{QFormat, Quant, RoundShift, SignalStats};
     use proptest::prelude::*;
+
+    /// Block ids kept from the row above are those found afresh: a span walked down
+    /// every pixel row (one block row scanned per row when `B > 1`), interrupted by a
+    /// span of other pixels and by a jump of rows, for every sample count and base.
+    fn kept_block_ids_are_found_afresh<const N: usize, const B: usize>() {
+        let (sw, rows) = (61, 50);
+        // Patches of 3x2 samples, a third of them split by an edge.
+        let prim: Vec<u32> = (0..sw * rows)
+            .map(|e| {
+                let (r, c) = (e / sw, e % sw);
+                let h = (r / 2 * 31 + c / 3 * 17) % 7;
+                if h == 0 { (r + c) as u32 % 2 } else { h as u32 }
+            })
+            .collect();
+        let mut kept = BlockIds::default();
+        let mut fresh = Vec::new();
+        let mut check = |base: usize, pixels: usize| {
+            kept.find::<N, B>(&prim, base, sw, pixels);
+            block_ids_n::<N, B>(&prim, base, sw, pixels, &mut fresh);
+            assert_eq!(kept.ids, fresh, "N={N} B={B} base={base} pixels={pixels}");
+        };
+        let pixels = (sw - N * B) / N;
+        let last = rows - N * B;
+        for start in [0, 1] {
+            for y in (start..=last).step_by(N) {
+                check(y * sw + start, pixels);
+                if y == N {
+                    check(y * sw + 2, pixels - 1);
+                }
+            }
+        }
+        check(5, pixels);
+        check(5 + 3 * N * sw, pixels);
+    }
+
+    #[test]
+    fn kept_block_ids_are_those_found_afresh() {
+        kept_block_ids_are_found_afresh::<1, 1>();
+        kept_block_ids_are_found_afresh::<1, 4>();
+        kept_block_ids_are_found_afresh::<2, 2>();
+        kept_block_ids_are_found_afresh::<2, 3>();
+        kept_block_ids_are_found_afresh::<4, 2>();
+        kept_block_ids_are_found_afresh::<4, 4>();
+        kept_block_ids_are_found_afresh::<8, 1>();
+        kept_block_ids_are_found_afresh::<8, 2>();
+    }
 
     proptest! {
         /// The integer error sums give the float recording's bits: roundings by 1 to 15
