@@ -397,6 +397,8 @@ pub(super) fn accumulate_build(
                 own: (Vec::new(), Vec::new()),
             },
             |sc, (j, ((acc_row, depth_row), cov_row))| {
+                // A row's statistics start afresh (after a row that failed too).
+                sc.stats = math.stats((region.x1 - region.x0) as usize);
                 let py = region.y0 + j as u32;
                 let mut out = RowOut {
                     stats: SignalStats::new("accumulate.product", p.frame.format),
@@ -438,8 +440,8 @@ pub(super) fn accumulate_build(
                     };
                     span::run(&sp, sc, dst, &mut out, build)?;
                 }
-                let row_stats = math.stats((region.x1 - region.x0) as usize);
-                out.stats = std::mem::replace(&mut sc.stats, row_stats).into_stats(&template);
+                let done = std::mem::replace(&mut sc.stats, math.stats(0));
+                out.stats = done.into_stats(&template);
                 Ok(out)
             },
         )
