@@ -3,12 +3,13 @@
 
 use super::shade::shade_vertex;
 use super::tessellate::tessellate;
+
+mod mesh;
 use super::vec3::{V3, add, cross, dot, lerp3, normalize, scale, sub};
 use super::{
     Camera, FrontEndStats, GuardBand, HostScene, Material, Object, Primitive, Rgb, Scene,
     ScreenVertex, Space,
 };
-use rayon::prelude::*;
 
 /// Screen depth of a view-space depth d (distance along the view axis):
 /// `z = (1/near - 1/d) / (1/near - 1/far)`, 0 at near, 1 at far, affine in screen space.
@@ -466,68 +467,7 @@ fn front_end_parts(
             | Object::Cone { material, .. }
             | Object::Cylinder { material, .. } => {
                 let mesh = tessellate(object).expect("canonical objects tessellate");
-                out.stats.triangles_in += mesh.triangles.len();
-                // `scale(n, 1.0)` is `n` exactly.
-                let shaded = |flip: f64| -> Vec<Rgb> {
-                    mesh.positions
-                        .par_iter()
-                        .zip(&mesh.normals)
-                        .with_min_len(part)
-                        .map(|(p, n)| shade(*p, scale(*n, flip), material))
-                        .collect()
-                };
-                let front = shaded(1.0);
-                let back = if mesh.closed {
-                    Vec::new()
-                } else {
-                    shaded(-1.0)
-                };
-                let emit = |o: &mut Out, tris: &[[u32; 3]]| {
-                    for t in tris {
-                        let idx = t.map(|k| k as usize);
-                        let p = idx.map(|k| mesh.positions[k]);
-                        let facing = front_facing(p, eye);
-                        if mesh.closed && !facing {
-                            o.stats.culled_backfaces += 1;
-                            continue;
-                        }
-                        let i = if facing {
-                            idx.map(|k| front[k])
-                        } else {
-                            idx.map(|k| back[k])
-                        };
-                        o.world_triangle(p, i);
-                    }
-                };
-                let n = mesh.triangles.len().div_ceil(part);
-                if n <= 1 {
-                    emit(&mut out, &mesh.triangles);
-                    continue;
-                }
-                if parts.len() < n {
-                    parts.resize_with(n, Vec::new);
-                }
-                let view = &out.view;
-                let counts: Vec<FrontEndStats> = parts[..n]
-                    .par_iter_mut()
-                    .zip(mesh.triangles.par_chunks(part))
-                    .map(|(list, tris)| {
-                        list.clear();
-                        let mut o = Out {
-                            view: view.clone(),
-                            guard,
-                            prims: std::mem::take(list),
-                            stats: FrontEndStats::default(),
-                        };
-                        emit(&mut o, tris);
-                        *list = o.prims;
-                        o.stats
-                    })
-                    .collect();
-                for (list, c) in parts.iter().zip(&counts) {
-                    out.prims.extend_from_slice(list);
-                    out.stats.add(c);
-                }
+                mesh::emit(&mut out, &mesh, |p, n| shade(p, n, material), (parts, part));
             }
             Object::Triangle {
                 space,
@@ -605,48 +545,6 @@ fn raw_triangle(
                 v.map(|p| shade(p, n, material))
             });
             out.world_triangle(v, i);
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Meshes emitted in parts on the threads give the serial primitives and counts: the
-    /// default scene's meshes in parts of 7 triangles against one part per mesh, through
-    /// the pinhole and a lens point, with a guard band that clips, and again on the part
-    /// lists the first run left (a second frame).
-    #[test]
-    fn parts_give_the_serial_emission() {
-        let scene = Scene::embedded("default").expect("embedded scene");
-        let guard = GuardBand {
-            x_min: 200.0,
-            x_max: 440.0,
-            y_min: 150.0,
-            y_max: 330.0,
-        };
-        let lens = LensPoint {
-            a: 0.03,
-            b: -0.02,
-            focus: 6.0,
-            jitter: (0.25, -0.5),
-        };
-        let mut parts = vec![Vec::new(); 2];
-        for lens in [None, Some(lens)] {
-            let serial = front_end_parts(
-                &scene,
-                &guard,
-                lens,
-                (Vec::new(), &mut Vec::new()),
-                usize::MAX,
-            );
-            assert!(serial.stats.clipped_guard > 0 && serial.stats.culled_backfaces > 0);
-            for _ in 0..2 {
-                let split = front_end_parts(&scene, &guard, lens, (Vec::new(), &mut parts), 7);
-                assert!(parts.len() > 500, "{} parts", parts.len());
-                assert_eq!(split, serial);
-            }
         }
     }
 }
