@@ -425,8 +425,8 @@ const PART: usize = 4096;
 /// [`front_end_through`] emitting the primitives into `prims` (cleared first: a list kept
 /// from an earlier frame, so that a run of frames does not allocate it again).
 ///
-/// A mesh of more than [`PART`] triangles is shaded and its triangles culled, projected and
-/// clipped on the threads, in parts of [`PART`] triangles, each into its own list of
+/// A mesh of more than 4096 triangles is shaded and its triangles culled, projected and
+/// clipped on the threads, in parts of 4096 triangles, each into its own list of
 /// `parts` (kept by the caller across frames, like `prims`); the parts are then appended in
 /// order. The primitives and counts are the serial ones whatever the threads: every
 /// triangle is emitted alone, and the parts keep the tessellation order.

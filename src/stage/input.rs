@@ -320,7 +320,7 @@ pub struct Footprint {
 
 /// The [`Footprint`]s of the host's primitives with the configured filter's apron (a
 /// pixel's window reaches `base / 2 + 1` pixels beyond a sample), in their order: on the
-/// threads in parts of [`FOOTPRINT_PART`] primitives (a scene of fewer runs serially).
+/// threads in parts of 4096 primitives (a scene of fewer runs serially).
 pub fn footprints(host: &HostScene, hw: &HwConfig) -> Vec<Footprint> {
     let apron = hw.accumulate.filter.base() as i64 / 2 + 1;
     host.prims

@@ -2,8 +2,8 @@
 //! primitive over a pixel's filter window, in primitive-id order, without allocation.
 //!
 //! The window is `base x base` blocks of `n x n` samples; which primitive owns each block
-//! (or that it crosses an edge) is found once per block of a pixel row
-//! ([`block_ids_n`]). A window whose blocks all belong to one primitive is one dot
+//! (or that it crosses an edge) is found once per block and kept for the windows of the
+//! next pixel row that share it ([`BlockIds`]). A window whose blocks all belong to one primitive is one dot
 //! product. Otherwise a first pass sums the whole window and finds its smallest and
 //! largest primitive ids, and each further pass sums one primitive's samples (the dot
 //! product masked to them) and finds the next larger id, so the primitives come out in id
@@ -103,7 +103,7 @@ impl WindowSums {
     /// `base` (row stride `sw`) into `self.frags`, sorted by primitive id: one entry per
     /// primitive with at least one sample of non-zero weight. `n = N`, the window is
     /// `B x B` blocks, `kw` the kernel's weights (row-major); `ids` are the block ids of
-    /// [`block_ids_n`], `g` the pixel's offset in them and `cols` their columns.
+    /// [`BlockIds`], `g` the pixel's offset in them and `cols` their columns.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     pub fn sum_nb<const N: usize, const B: usize, W: Word>(
@@ -249,12 +249,14 @@ impl<'a, const N: usize, const B: usize> Window<'a, N, B> {
 /// Lanes of a window pass's partial results (one AVX2 register of 32-bit values).
 const LANES: usize = 8;
 
-/// The block ids of one span's windows (see [`block_ids_n`]), kept for the span of the
+/// The ids of the `n x n` blocks (`n = N`) of one span's windows, kept for the span of the
 /// same pixels on the next pixel row: its windows start `N` sample rows lower, so their
 /// first `B - 1` block rows are this row's last `B - 1`.
 #[derive(Debug, Default)]
 pub(super) struct BlockIds {
-    /// `ids[by * cols + g]` (see [`block_ids_n`]).
+    /// `ids[by * cols + g]`: the primitive owning all samples of block row `by`, block
+    /// column `g` (pixel `g - bx` of the span sees it as its block `bx`), or [`MIXED`] when
+    /// the block crosses an edge.
     pub ids: Vec<u64>,
     /// The buffer index of the first window and the pixels they were found for (`None`:
     /// none yet).
@@ -265,7 +267,7 @@ impl BlockIds {
     /// The block ids of the windows of `pixels` pixels whose first window starts at buffer
     /// index `base` (row stride `sw`): the last `B - 1` block rows of the previous call
     /// moved up when it was the same span one pixel row higher, and only the rows not
-    /// found yet scanned. The same values as [`block_ids_n`] every time.
+    /// found yet scanned. The same values as finding them all afresh every time.
     #[inline(always)]
     pub fn find<const N: usize, const B: usize>(
         &mut self,
@@ -292,10 +294,9 @@ impl BlockIds {
     }
 }
 
-/// The ids of the `n x n` blocks (`n = N`) of the windows of `pixels` pixels of one pixel
-/// row: `ids[by * cols + g]` is the primitive owning all samples of block row `by`, block
-/// column `g` (pixel `g - bx` of the span sees it as its block `bx`), or [`MIXED`] when the
-/// block crosses an edge. `base` is the buffer index of the span's first window.
+/// Every block id of the windows of `pixels` pixels of one pixel row found afresh (laid out
+/// as [`BlockIds::ids`]; `base` is the buffer index of the span's first window): what
+/// [`BlockIds::find`] must give, in the tests.
 #[cfg(test)]
 pub(super) fn block_ids_n<const N: usize, const B: usize>(
     prim: &[u32],
@@ -309,7 +310,7 @@ pub(super) fn block_ids_n<const N: usize, const B: usize>(
     block_rows_n::<N, B>(prim, base, sw, pixels, 0, ids);
 }
 
-/// Block rows `from..B` of [`block_ids_n`] into `ids` (sized `B * cols`).
+/// Block rows `from..B` of the ids of [`BlockIds::find`] into `ids` (sized `B * cols`).
 #[inline(always)]
 fn block_rows_n<const N: usize, const B: usize>(
     prim: &[u32],
