@@ -5,7 +5,8 @@
 use super::kernel::Kernel;
 use super::points::{PointFrags, point_weights};
 use super::span::{self, Build, Dst, Scratch, Span};
-use super::window::{ProductStats, WindowSums, sums_fit_u32};
+use super::stats::ProductStats;
+use super::window::{WindowSums, sums_fit_u32};
 use crate::error::{Error, Result};
 use crate::fixed::{Overflow, Quantizer, RoundShift, SignalStats, round_shift_i64};
 use crate::stage::visibility::{BACKGROUND, Samples};

@@ -18,7 +18,8 @@
 //! Files: `kernel` (the quantised [`Kernel`]), `fixed` (the fixed model into the frame
 //! memory), `points` (light points and the sample region), `float` (the float reference),
 //! `cost` (the stage's hardware cost), `stage` (the stage contract), `window` (the
-//! per-pixel window sums of the fixed model), `span` (the fixed model's pixel loop).
+//! per-pixel window sums of the fixed model), `span` (the fixed model's pixel loop),
+//! `stats` (the product statistics of a row of pixels).
 
 mod cost;
 mod fixed;
@@ -27,6 +28,7 @@ mod kernel;
 mod points;
 mod span;
 mod stage;
+mod stats;
 mod window;
 
 pub use cost::{FRAME_MEMORY, WEIGHT_ROM, cost};

@@ -10,7 +10,8 @@
 //! model).
 
 use super::fixed::{AccParams, FragMath, RowOut};
-use super::window::{BlockIds, ProductStats, WindowSums, Word};
+use super::stats::ProductStats;
+use super::window::{BlockIds, WindowSums, Word};
 use crate::error::Result;
 use crate::stage::visibility::{BACKGROUND, Samples};
 
