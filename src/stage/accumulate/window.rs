@@ -242,7 +242,7 @@ impl<'a, const N: usize, const B: usize> Window<'a, N, B> {
     #[inline(always)]
     fn first_with<W: Word>(&self, g: u32) -> First<W> {
         let (mut whole, mut g_sum) = ([W::default(); LANES], [W::default(); LANES]);
-        let (mut lo, mut hi, mut found) = ([u32::MAX; LANES], [0u32; LANES], [0u32; LANES]);
+        let (mut lo, mut hi) = ([u32::MAX; LANES], [0u32; LANES]);
         for (is, ps, ws, nzs) in self.rows() {
             for t in 0..N * B {
                 let l = t % LANES;
@@ -251,17 +251,20 @@ impl<'a, const N: usize, const B: usize> Window<'a, N, B> {
                 whole[l] = whole[l].add(v);
                 g_sum[l] = g_sum[l].add(v.keep(is_g));
                 let cand = nzs[t] & 0u32.wrapping_sub(u32::from(!is_g));
-                found[l] |= cand;
                 lo[l] = lo[l].min(ps[t] | !cand);
                 hi[l] = hi[l].max(ps[t] & cand);
             }
         }
+        let lo = lo.into_iter().fold(u32::MAX, u32::min);
+        let hi = hi.into_iter().fold(0, u32::max);
         First {
             whole: whole.into_iter().fold(W::default(), W::add),
             g_sum: g_sum.into_iter().fold(W::default(), W::add),
-            others: found.into_iter().fold(0, |a, b| a | b) != 0,
-            lo: lo.into_iter().fold(u32::MAX, u32::min),
-            hi: hi.into_iter().fold(0, u32::max),
+            // Without another id the extremes stay `u32::MAX` and 0; with one, they
+            // bracket it.
+            others: lo <= hi,
+            lo,
+            hi,
         }
     }
 
