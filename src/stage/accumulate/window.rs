@@ -238,7 +238,7 @@ impl<'a, const N: usize, const B: usize> Window<'a, N, B> {
     /// The first pass over a mixed window: its whole sum, the sum over the samples of
     /// primitive `g`, and the smallest and largest other ids among the samples of non-zero
     /// weight. Partial results stay lane-wise until the window's end (the adds wrap, the
-    /// min, max and or are exact, so any order gives the same values).
+    /// min and max are exact, so any order gives the same values).
     #[inline(always)]
     fn first_with<W: Word>(&self, g: u32) -> First<W> {
         let (mut whole, mut g_sum) = ([W::default(); LANES], [W::default(); LANES]);
