@@ -6,8 +6,11 @@ mod common;
 use common::Rng;
 use igemu::fixed::Quant;
 use igemu::stage::Grid;
+use igemu::stage::Pool;
 use igemu::stage::input::{QPrim, QVertex};
-use igemu::stage::raster::{self, FPrim, Frag, FragF, RasterParams, RasterWork, SampleRegion};
+use igemu::stage::raster::{
+    self, FPrim, Frag, FragF, PART_ROWS, RasterParams, RasterWork, Run, SampleRegion,
+};
 use igemu::stage::setup::{self, SetupWork};
 use proptest::prelude::*;
 
@@ -125,6 +128,87 @@ proptest! {
         let prims: Vec<QPrim> = (0..spokes).map(|i| QPrim::Triangle([centre, ring[i], ring[(i + 1) % spokes]])).collect();
         let c = coverage(&prims, &p, &reg);
         prop_assert!(c.iter().all(|&x| x == 1));
+    }
+}
+
+/// Random triangles, lines and light points over a `w` x `h` pixel screen, some reaching
+/// past its edges.
+fn random_prims(rng: &mut Rng, n: usize, w: f64, h: f64) -> Vec<QPrim> {
+    let pt = |rng: &mut Rng| {
+        v(
+            rng.range(-0.2 * w, 1.2 * w),
+            rng.range(-0.2 * h, 1.2 * h),
+            rng.bits(20) as i64,
+            rng.bits(12) as i64,
+        )
+    };
+    (0..n)
+        .map(|k| match k % 5 {
+            3 => QPrim::Line {
+                a: pt(rng),
+                b: pt(rng),
+                width: 1 + rng.bits(6) as i64,
+            },
+            4 => QPrim::Point {
+                v: pt(rng),
+                size: 1 + rng.bits(7) as i64,
+            },
+            _ => QPrim::Triangle([pt(rng), pt(rng), pt(rng)]),
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// The frame's walk on the threads (bands, their runs in parts of PART_ROWS rows) holds
+    /// exactly the whole-region walk's runs: each part's runs of a primitive are that
+    /// primitive's runs in the part's rows, in the walker's order; the parts tile the
+    /// region in order; the samples stepped per primitive and the work are the same; a
+    /// second frame on the recycled lists gives the same parts.
+    #[test]
+    fn parts_hold_the_whole_region_walk(seed in any::<u64>(), n in 1usize..40, h in 40u32..160) {
+        let (p, reg) = params(4, 48, h);
+        let mut rng = Rng::new(seed);
+        let prims = random_prims(&mut rng, n, 48.0, f64::from(h));
+        let mut sw = SetupWork::default();
+        let setups: Vec<_> = prims.iter().map(|q| setup::setup(q, &p.grid, p.guard, &mut sw)).collect();
+        let pool = Pool::new();
+        let (frags, stepped, work) = raster::walk(&setups, &p, &reg, true, &pool);
+        let mut whole_work = RasterWork::default();
+        let whole: Vec<Vec<Run>> = setups.iter().enumerate().map(|(q, s)| {
+            let (mut runs, before) = (Vec::new(), whole_work.samples + whole_work.walked);
+            raster::raster_rows(s, &p, &reg, (reg.k0, reg.k1), true, &mut runs, &mut whole_work);
+            prop_assert_eq!(stepped[q], whole_work.samples + whole_work.walked - before);
+            Ok(runs)
+        }).collect::<Result<_, _>>()?;
+        prop_assert_eq!(work, whole_work);
+        let width = reg.width();
+        let mut end = 0;
+        for ((&(a, b), data), spans) in frags.bounds.iter().zip(&frags.parts).zip(&frags.spans) {
+            prop_assert_eq!(a, end);
+            prop_assert!(b > a && b - a <= PART_ROWS as usize * width);
+            end = b;
+            prop_assert!(spans.windows(2).all(|s| s[0].prim < s[1].prim && s[0].b == s[1].a));
+            for sp in spans {
+                let want: Vec<Run> = whole[sp.prim as usize]
+                    .iter()
+                    .filter(|r| (a..b).contains(&(r.s as usize)))
+                    .copied()
+                    .collect();
+                prop_assert_eq!(&data[sp.a..sp.b], &want[..]);
+            }
+        }
+        prop_assert_eq!(end, reg.len());
+        for (q, runs) in whole.iter().enumerate() {
+            let n: usize = frags.of(q).map(<[Run]>::len).sum();
+            prop_assert_eq!(n, runs.len());
+        }
+        pool.give(frags.parts.clone());
+        pool.give(frags.spans.clone());
+        let (again, ..) = raster::walk(&setups, &p, &reg, true, &pool);
+        prop_assert_eq!(&again.parts, &frags.parts);
+        prop_assert_eq!(&again.spans, &frags.spans);
     }
 }
 

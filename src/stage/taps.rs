@@ -218,7 +218,7 @@ pub struct Span {
 }
 
 /// Per-primitive fragment lists, in the order the raster emitted them, held in parts: the
-/// fixed raster writes one part per band of sample rows (every primitive's fragments in
+/// fixed raster writes one part per few sample rows (every primitive's fragments in
 /// those rows, in primitive order), so each part of the sample buffer reads its own part
 /// alone; the float raster writes one part. A primitive's fragments are its pieces in part
 /// order. Two lists are equal when every primitive's fragments are, however they are split.
@@ -233,6 +233,39 @@ pub struct Frags<T> {
     pub bounds: Vec<(usize, usize)>,
     /// Primitives listed.
     pub prims: usize,
+    /// Every primitive's pieces, built on the first [`Frags::of`].
+    pub index: OnceLock<PieceIndex>,
+}
+
+/// The pieces of a [`Frags`] by primitive: primitive `p`'s are
+/// `pieces[start[p]..start[p + 1]]`, each `(part, span)` in part order (one pass over the
+/// spans, then a counting sort by primitive).
+#[derive(Clone, Debug, Default)]
+pub struct PieceIndex {
+    start: Vec<u32>,
+    pieces: Vec<(u32, u32)>,
+}
+
+impl PieceIndex {
+    fn new(spans: &[Vec<Span>], prims: usize) -> Self {
+        let mut start = vec![0u32; prims + 1];
+        for sp in spans.iter().flatten() {
+            start[sp.prim as usize + 1] += 1;
+        }
+        for p in 0..prims {
+            start[p + 1] += start[p];
+        }
+        let mut next = start.clone();
+        let mut pieces = vec![(0, 0); start[prims] as usize];
+        for (part, list) in spans.iter().enumerate() {
+            for (j, sp) in list.iter().enumerate() {
+                let at = &mut next[sp.prim as usize];
+                pieces[*at as usize] = (part as u32, j as u32);
+                *at += 1;
+            }
+        }
+        Self { start, pieces }
+    }
 }
 
 impl<T> Frags<T> {
@@ -257,21 +290,23 @@ impl<T> Frags<T> {
             spans: vec![spans],
             bounds: vec![(0, usize::MAX)],
             prims: n,
+            index: OnceLock::new(),
         }
     }
 
     /// Primitive `p`'s fragments, piece by piece (one piece per part it has fragments in).
     pub fn of(&self, p: usize) -> impl Iterator<Item = &[T]> + '_ {
-        self.parts
-            .iter()
-            .zip(&self.spans)
-            .filter_map(move |(data, spans)| {
-                let j = spans.partition_point(|s| (s.prim as usize) < p);
-                spans
-                    .get(j)
-                    .filter(|s| s.prim as usize == p)
-                    .map(|s| &data[s.a..s.b])
-            })
+        let index = self
+            .index
+            .get_or_init(|| PieceIndex::new(&self.spans, self.prims));
+        let range = match index.start.get(p..p + 2) {
+            Some(&[a, b]) => a as usize..b as usize,
+            _ => 0..0,
+        };
+        index.pieces[range].iter().map(move |&(part, j)| {
+            let s = self.spans[part as usize][j as usize];
+            &self.parts[part as usize][s.a..s.b]
+        })
     }
 
     /// The number of primitive `p`'s fragments.

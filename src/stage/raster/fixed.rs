@@ -59,6 +59,19 @@ pub struct RasterParams {
     pub channels: usize,
 }
 
+/// Where the walker puts a row's run: a list, or the part of a band its row falls in.
+pub trait RunSink {
+    /// Takes the run of sample row `k`.
+    fn push(&mut self, k: i64, run: Run);
+}
+
+impl RunSink for Vec<Run> {
+    #[inline]
+    fn push(&mut self, _: i64, run: Run) {
+        Vec::push(self, run);
+    }
+}
+
 /// Left-edge attribute stepping: increments for a column move of `a` or `a + 1`, per
 /// intensity channel and for depth.
 struct EdgeInterp {
@@ -115,7 +128,7 @@ pub fn raster_tri_rows(
     reg: &SampleRegion,
     rows: (i64, i64),
     above: bool,
-    out: &mut Vec<Run>,
+    out: &mut impl RunSink,
     w: &mut RasterWork,
 ) {
     let (mut long, mut upper, mut lower) = (t.long, t.upper, t.lower);
@@ -165,7 +178,7 @@ pub fn raster_tri_rows(
                 };
                 w.clamped += codes.clamped(&run);
                 w.samples += u64::from(run.n);
-                out.push(run);
+                out.push(k, run);
             }
         } else if above {
             w.rows_walked += 1;
@@ -213,7 +226,7 @@ pub fn raster_point(
     p: &RasterParams,
     reg: &SampleRegion,
     rows: (i64, i64),
-    out: &mut Vec<Run>,
+    out: &mut impl RunSink,
     w: &mut RasterWork,
 ) {
     let (c0, c1) = (pt.c.0.max(reg.c0), pt.c.1.min(reg.c1));
@@ -226,14 +239,17 @@ pub fn raster_point(
     let i: [i64; 3] = std::array::from_fn(|c| pt.i[c].clamp(0, p.i_max[c]) << p.guard);
     for k in k0..k1 {
         w.spans += 1;
-        out.push(Run {
-            s: reg.index(c0, k) as u32,
-            n: (c1 - c0) as u32,
-            z,
-            dz: 0,
-            i,
-            di: [0; 3],
-        });
+        out.push(
+            k,
+            Run {
+                s: reg.index(c0, k) as u32,
+                n: (c1 - c0) as u32,
+                z,
+                dz: 0,
+                i,
+                di: [0; 3],
+            },
+        );
     }
     w.samples += ((c1 - c0) * (k1 - k0)) as u64;
 }
@@ -259,7 +275,7 @@ pub fn raster_rows(
     reg: &SampleRegion,
     rows: (i64, i64),
     above: bool,
-    out: &mut Vec<Run>,
+    out: &mut impl RunSink,
     w: &mut RasterWork,
 ) {
     match s {

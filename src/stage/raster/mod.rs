@@ -8,17 +8,20 @@
 
 pub mod fixed;
 pub mod float;
+mod parts;
 pub mod runs;
 
 pub use fixed::{
-    RasterParams, RasterWork, raster, raster_point, raster_rows, raster_tri, raster_tri_rows,
+    RasterParams, RasterWork, RunSink, raster, raster_point, raster_rows, raster_tri,
+    raster_tri_rows,
 };
 pub use float::{FPrim, FVertex, raster_f64, raster_tri_f64};
+pub use parts::{PART_ROWS, walk};
 pub use runs::{FragRuns, Run, RunCodes};
 
 pub use super::SampleRegion;
 use super::input::QPrim;
-use super::taps::{Frags, Span, Taps, processing_order};
+use super::taps::{Frags, Taps, processing_order};
 use super::{
     Cost, Cx, Facts, LocalError, MemImage, Need, Notes, Stage, StageId, TokenKind, Tokens, Unit,
 };
@@ -26,7 +29,6 @@ use crate::config::HwConfig;
 use crate::error::Result;
 use crate::fixed::SignalStats;
 use crate::scene::Scene;
-use rayon::prelude::*;
 use std::sync::Arc;
 
 /// One covered sample of one primitive: buffer index, depth and intensity codes.
@@ -108,26 +110,6 @@ fn compare_frags(
     }
 }
 
-/// The bands of sample rows the fixed raster writes its parts in: about 256 sample rows
-/// each, at most 8, a count that depends on the region alone (so the fragment lists and
-/// every count are the same on any thread count). Narrower bands (64 rows, up to 16) made
-/// the default frame slower: each band walks the edges of every primitive that crosses it
-/// down to its rows.
-fn band_rows(reg: &SampleRegion) -> Vec<(i64, i64)> {
-    let h = reg.k1 - reg.k0;
-    let n = (h / 256).clamp(1, 8);
-    (0..n)
-        .map(|j| (reg.k0 + h * j / n, reg.k0 + h * (j + 1) / n))
-        .collect()
-}
-
-/// The sample indices of the rows `rows` of `reg`.
-fn sample_range(reg: &SampleRegion, rows: (i64, i64)) -> (usize, usize) {
-    let w = reg.width();
-    let at = |k: i64| (k - reg.k0).max(0) as usize * w;
-    (at(rows.0), at(rows.1))
-}
-
 /// The raster stage.
 pub struct Raster;
 
@@ -158,62 +140,9 @@ impl Stage for Raster {
         let p = params(cx);
         let reg = cx.layout.samples;
         let setups = taps.fixed.setups();
-        let mut w = RasterWork::default();
         // A banded run's later bands do not count the walk above their rows again.
         let above = cx.layout.band.is_none_or(|b| b.first);
-        // One part per band of sample rows (a fixed count, whatever the threads): each band
-        // walks every primitive in scene order and keeps the fragments of its rows, so the
-        // parts are disjoint ranges of the sample buffer and visibility reads each fragment
-        // once. The counts and tokens are integers summed in band order.
-        let bands = band_rows(&reg);
-        let n = setups.len();
-        // Last frame's parts, whose sizes fit the same scene's.
-        let mut bufs: Vec<Vec<Run>> = cx.pool.reuse();
-        let mut span_bufs: Vec<Vec<Span>> = cx.pool.reuse();
-        bufs.resize_with(bands.len(), Vec::new);
-        span_bufs.resize_with(bands.len(), Vec::new);
-        let done: Vec<_> = bands
-            .par_iter()
-            .zip(bufs.par_iter_mut().zip(span_bufs.par_iter_mut()))
-            .enumerate()
-            .map(|(b, (&rows, (data, spans)))| {
-                let (mut data, mut spans) = (std::mem::take(data), std::mem::take(spans));
-                data.clear();
-                spans.clear();
-                let mut w = RasterWork::default();
-                let mut stepped: Vec<(u32, u64)> = Vec::new();
-                for (q, s) in setups.iter().enumerate() {
-                    let (a, before) = (data.len(), w.samples + w.walked);
-                    raster_rows(s, &p, &reg, rows, above && b == 0, &mut data, &mut w);
-                    if data.len() > a {
-                        spans.push(Span {
-                            prim: q as u32,
-                            a,
-                            b: data.len(),
-                        });
-                    }
-                    if w.samples + w.walked > before {
-                        stepped.push((q as u32, w.samples + w.walked - before));
-                    }
-                }
-                (data, spans, stepped, w)
-            })
-            .collect();
-        let mut out = Frags {
-            parts: Vec::with_capacity(done.len()),
-            spans: Vec::with_capacity(done.len()),
-            bounds: bands.iter().map(|r| sample_range(&reg, *r)).collect(),
-            prims: n,
-        };
-        let mut stepped = vec![0u64; n];
-        for (data, spans, st, wk) in done {
-            out.parts.push(data);
-            out.spans.push(spans);
-            for (q, k) in st {
-                stepped[q as usize] += k;
-            }
-            w.add(&wk);
-        }
+        let (out, stepped, w) = walk(setups, &p, &reg, above, cx.pool);
         let prims = &taps.fixed.prims().q;
         let order = processing_order(|i| matches!(prims[i], QPrim::Point { .. }), prims.len());
         let tokens = order.iter().map(|&i| stepped[i]).collect();
