@@ -418,37 +418,83 @@ fn exec_with<P: Plane>(
 
 /// The composite `out` (with `g` guard bits below the frame LSB) as codes of `frame_fmt`
 /// into `res`: rounded with `quant`, saturated; returns the saturations. In chunks on the
-/// threads (a count: the same on any thread count).
+/// threads (a count: the same on any thread count). A composite is never negative, and
+/// every format's smallest code is at most 0, so the words up to the largest that rounds
+/// to the top code (found once: the rounding is monotonic) take a branch-free rounding
+/// that vectorises; a chunk holding a larger word then takes the quantiser for those.
 fn to_frame(out: &[u64], res: &mut [u32], frame_fmt: QFormat, g: u32, quant: Quant) -> u64 {
     const CHUNK: usize = 1 << 14;
     let frame_q = Quantizer::new(frame_fmt, quant, Overflow::Sat);
     let raw_frac = (g + frame_fmt.frac_bits) as i32;
-    // `guard_bits` is at most 24 (config): the i64 rounding applies to every word that
-    // fits an i64.
+    // `guard_bits` is at most 24 (config); wider guards take the quantiser throughout.
     let round = RoundShift::new(g.min(62), quant);
-    // A composite is never negative, and every format's smallest code is at most 0: codes
-    // in `0..=hi` are in range.
     let hi = frame_fmt.max_code().clamp(0, i64::from(u32::MAX));
+    let limit = match round.raw_range(0, hi) {
+        Some((_, top)) if g < 63 => Some(top as u64),
+        _ => None,
+    };
     out.par_chunks(CHUNK)
         .zip(res.par_chunks_mut(CHUNK))
         .map(|(o, r)| {
+            if let Some(limit) = limit
+                && !simd::round_words(o, r, round, limit)
+            {
+                return 0;
+            }
             let mut overflows = 0;
             for (&v, c) in o.iter().zip(r) {
-                let rounded = match i64::try_from(v) {
-                    Ok(v) if g < 63 => round.apply(v),
-                    _ => i64::MAX,
-                };
-                *c = if (0..=hi).contains(&rounded) {
-                    rounded as u32
-                } else {
-                    let q = frame_q.quantize_raw(i128::from(v), raw_frac);
-                    overflows += u64::from(q.overflow);
-                    q.code as u32
-                };
+                if limit.is_some_and(|l| v <= l) {
+                    continue;
+                }
+                let q = frame_q.quantize_raw(i128::from(v), raw_frac);
+                overflows += u64::from(q.overflow);
+                *c = q.code as u32;
             }
             overflows
         })
         .sum()
+}
+
+/// Rounds the words of `o` up to `limit` into `r` (the larger ones are left to the
+/// caller), branch-free; whether any word was larger.
+#[inline(always)]
+fn round_words(o: &[u64], r: &mut [u32], round: RoundShift, limit: u64) -> bool {
+    let mut beyond = false;
+    for (&v, c) in o.iter().zip(r.iter_mut()) {
+        *c = round.apply_nonneg(v.min(limit)) as u32;
+        beyond |= v > limit;
+    }
+    beyond
+}
+
+#[cfg(target_arch = "x86_64")]
+mod simd {
+    use crate::fixed::RoundShift;
+
+    /// [`super::round_words`], compiled with AVX2 where the CPU has it.
+    pub fn round_words(o: &[u64], r: &mut [u32], round: RoundShift, limit: u64) -> bool {
+        #[target_feature(enable = "avx2")]
+        fn avx2(o: &[u64], r: &mut [u32], round: RoundShift, limit: u64) -> bool {
+            super::round_words(o, r, round, limit)
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU
+            // has it.
+            unsafe { avx2(o, r, round, limit) }
+        } else {
+            super::round_words(o, r, round, limit)
+        }
+    }
+}
+
+/// Other targets: the portable build only.
+#[cfg(not(target_arch = "x86_64"))]
+mod simd {
+    use crate::fixed::RoundShift;
+
+    pub fn round_words(o: &[u64], r: &mut [u32], round: RoundShift, limit: u64) -> bool {
+        super::round_words(o, r, round, limit)
+    }
 }
 
 /// `o = col` over `o` with alpha `aq / one`: `round((col aq + o (one - aq)) / one)`; the

@@ -205,21 +205,27 @@ pub fn plan_layers_in(
     // quantiser gives it (tests/dof.rs checks the two agree).
     let exact_mid = zq.format.frac_bits == lens.z_frac && zq.quant == Quant::RndInf;
     let zq_max = zq.format.max_code();
-    let mid_sigma = |far: u32, near: u32| {
-        let zm = (lens.z_of(far) + lens.z_of(near)) / 2.0;
+    // The middle depth and its sigma; the sigma alone where the middle code is exact (the
+    // layer's growth asks for it at every depth code).
+    let mid_sig = |far: u32, near: u32, zm: Option<f64>| {
         let sum = i64::from(far) + i64::from(near) + 1;
         if exact_mid && far != u32::MAX && sum / 2 <= zq_max {
-            return (zm, sig((sum / 2) as u32));
+            return sig((sum / 2) as u32);
         }
         // The middle depth as a code (the background's z_inf is exact): sigma from its code
         // (`lens.z_code`, its quantiser built once).
+        let zm = zm.unwrap_or_else(|| (lens.z_of(far) + lens.z_of(near)) / 2.0);
         let code = zq.quantize_f64(zm).code;
         let c = if code >= i64::from(u32::MAX) {
             u32::MAX
         } else {
             code.max(0) as u32
         };
-        (zm, sig(c))
+        sig(c)
+    };
+    let mid_sigma = |far: u32, near: u32| {
+        let zm = (lens.z_of(far) + lens.z_of(near)) / 2.0;
+        (zm, mid_sig(far, near, Some(zm)))
     };
     let mut diffs = KernelDifferences::new(p.kernel);
     let mut mask_difference = |a: f64, b: f64, k: f64| diffs.get(a, b, k);
@@ -234,7 +240,7 @@ pub fn plan_layers_in(
         let mut accepted: Option<(u64, u64)> = None;
         while j + 1 < keys.len() {
             let (near, s_near) = (keys[j + 1], sigs[j + 1]);
-            let (_, s_mid) = mid_sigma(far, near);
+            let s_mid = mid_sig(far, near, None);
             let pair = (s_near.to_bits(), s_mid.to_bits());
             if accepted != Some(pair) {
                 let mut ok = mask_difference(s_far, s_near, p.k) < p.p

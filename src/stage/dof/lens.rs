@@ -165,6 +165,30 @@ impl LensMap {
         2.0 * self.k * (self.inv_focus - self.inv_depth(self.z_of(key))).abs()
     }
 
+    /// The depth codes (not the background's `u32::MAX`) whose [`LensMap::coc_f64`] is at
+    /// most `coc_px`, as one range `(first, last)`, or `None`. Every operation of the CoC
+    /// is monotone in its argument, so `1/U - 1/D` never falls as the code grows (the view
+    /// volume has `near < far`) and the CoC falls to the focus and rises past it: the codes
+    /// within the limit are a range, found by bisection, equal to a test of every code.
+    pub fn focus_keys(&self) -> Option<(u32, u32)> {
+        debug_assert!(self.inv_near >= self.inv_far);
+        let end = u64::from(u32::MAX);
+        // The first code in `lo..hi` where `p` stops holding (`p` holds, then does not).
+        let split = |mut lo: u64, mut hi: u64, p: &dyn Fn(u32) -> bool| {
+            while lo < hi {
+                let m = lo + (hi - lo) / 2;
+                if p(m as u32) { lo = m + 1 } else { hi = m }
+            }
+            lo
+        };
+        let behind = |k: u32| self.inv_focus - self.inv_depth(self.z_of(k)) >= 0.0;
+        let within = |k: u32| self.coc_f64(k) <= self.coc_px;
+        let c = split(0, end, &|k| !behind(k));
+        let first = split(0, c, &|k| !within(k));
+        let past = split(c, end, &within);
+        (first < past).then(|| (first as u32, (past - 1) as u32))
+    }
+
     /// The quantiser of the slope constant G: `UQ<i>.16` (`G_FRAC` fraction bits, `i` the
     /// integer bits of G after rounding, at least 1), RND_INF, SAT (the format holds G, so SAT
     /// does not act below 62 bits).

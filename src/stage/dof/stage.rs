@@ -370,42 +370,104 @@ fn per_pixel_notes(cx: &Cx, b: &Blurred, out: &[u32]) -> serde_json::Value {
 
 /// The blur over the frame's object pixels (depth code not `u32::MAX`): the smallest and
 /// largest sigma (px), the largest circle of confusion (px) and the pixels in focus (CoC
-/// within `lens.coc_px`). In chunks on the threads: minima, maxima and counts are the same
-/// in any order.
+/// within `lens.coc_px`). The sigma code is monotone in the depth code and the CoC falls
+/// then rises ([`LensMap::focus_keys`]), so the extremes are those of the smallest and
+/// largest depth codes, and the pixels in focus those of one range of codes: one pass of
+/// minima, maxima and counts over the pixels, in chunks on the threads (the same in any
+/// order).
 fn blur_facts(depth: &[u32], lens: &LensMap) -> (f64, f64, f64, u64) {
     const CHUNK: usize = 1 << 14;
-    let coder = lens.sigma_coder();
-    let one = (1u64 << SIGMA_FRAC) as f64;
-    let none = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, 0u64);
-    depth
+    let focus = lens.focus_keys();
+    // An empty range counts nothing: its width is taken from a start past every code.
+    let (f0, fw) = focus.map_or((u32::MAX, 0), |(a, b)| (a, b - a));
+    let (lo, hi, in_focus) = depth
         .par_chunks(CHUNK)
         .map(|chunk| {
-            let (mut sig_min, mut sig_max, mut coc_max, mut in_focus) = none;
-            // Runs of one depth code are common: each run's sigma and CoC are computed once.
-            let mut last: Option<(u32, bool)> = None;
+            let (mut lo, mut hi, mut n) = (u32::MAX, 0u32, 0u64);
             for &k in chunk {
-                if k == u32::MAX {
-                    continue;
-                }
-                let focused = match last {
-                    Some((lk, f)) if lk == k => f,
-                    _ => {
-                        let s = coder.code(k) as f64 / one;
-                        sig_min = sig_min.min(s);
-                        sig_max = sig_max.max(s);
-                        let c = lens.coc_f64(k);
-                        coc_max = coc_max.max(c);
-                        let f = c <= lens.coc_px;
-                        last = Some((k, f));
-                        f
-                    }
-                };
-                in_focus += u64::from(focused);
+                lo = lo.min(k);
+                hi = hi.max(if k == u32::MAX { 0 } else { k });
+                n += u64::from(k != u32::MAX && k.wrapping_sub(f0) <= fw);
             }
-            (sig_min, sig_max, coc_max, in_focus)
+            (lo, hi, n)
         })
         .reduce(
-            || none,
-            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2), a.3 + b.3),
-        )
+            || (u32::MAX, 0, 0),
+            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2),
+        );
+    if lo == u32::MAX {
+        return (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0);
+    }
+    let coder = lens.sigma_coder();
+    let one = (1u64 << SIGMA_FRAC) as f64;
+    let sig = |k: u32| coder.code(k) as f64 / one;
+    let coc_max = lens.coc_f64(lo).max(lens.coc_f64(hi));
+    (sig(lo), sig(hi), coc_max, in_focus)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::SigmaForm;
+    use proptest::prelude::*;
+
+    /// [`blur_facts`] pixel by pixel: every object pixel's sigma code and CoC.
+    fn every_pixel(depth: &[u32], lens: &LensMap) -> (f64, f64, f64, u64) {
+        let coder = lens.sigma_coder();
+        let one = (1u64 << SIGMA_FRAC) as f64;
+        let (mut lo, mut hi, mut coc, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, 0);
+        for &k in depth.iter().filter(|&&k| k != u32::MAX) {
+            let s = coder.code(k) as f64 / one;
+            (lo, hi) = (lo.min(s), hi.max(s));
+            let c = lens.coc_f64(k);
+            coc = coc.max(c);
+            n += u64::from(c <= lens.coc_px);
+        }
+        (lo, hi, coc, n)
+    }
+
+    proptest! {
+        /// The blur facts from the extreme codes and the in-focus range are those of every
+        /// pixel, on both embedded lenses in both sigma forms, for codes all over the depth
+        /// range, around the in-focus range's ends, and the background.
+        #[test]
+        fn blur_facts_are_those_of_every_pixel(
+            cone in any::<bool>(),
+            affine in any::<bool>(),
+            rom_bits in 4u32..12,
+            picks in prop::collection::vec((0u8..4, any::<u32>()), 1..300),
+        ) {
+            let scene = Scene::embedded(if cone { "cone-focus" } else { "default" }).unwrap();
+            let form = if affine { SigmaForm::Affine } else { SigmaForm::Paper };
+            let lens = LensMap::from_camera(&scene.camera, 480, 24, form, rom_bits).unwrap();
+            let (f0, f1) = lens.focus_keys().unwrap();
+            let depth: Vec<u32> = picks
+                .iter()
+                .map(|&(kind, r)| match kind {
+                    0 => r % (1 << 25),
+                    1 => f0.wrapping_add(r % 9).wrapping_sub(4),
+                    2 => f1.wrapping_add(r % 9).wrapping_sub(4),
+                    _ => u32::MAX,
+                })
+                .collect();
+            prop_assert_eq!(blur_facts(&depth, &lens), every_pixel(&depth, &lens));
+        }
+    }
+
+    /// The in-focus range is that of a test of every code near its ends (codes 2^24 apart
+    /// in screen z 1: the default lens).
+    #[test]
+    fn focus_keys_bound_the_codes_in_focus() {
+        let scene = Scene::embedded("default").unwrap();
+        let lens = LensMap::from_camera(&scene.camera, 480, 24, SigmaForm::Paper, 10).unwrap();
+        let (f0, f1) = lens.focus_keys().unwrap();
+        assert!(0 < f0 && f0 < f1 && f1 < 1 << 24, "{f0} {f1}");
+        for k in f0 - 50..f1 + 50 {
+            assert_eq!(
+                lens.coc_f64(k) <= lens.coc_px,
+                (f0..=f1).contains(&k),
+                "code {k}"
+            );
+        }
+    }
 }

@@ -7,13 +7,12 @@
 //! the other, and the same on any thread count.
 
 use super::fast::Plane;
-use super::fixed::{DofWork, Exec, composite, share};
+use super::fixed::{DofWork, Exec, composite, share, udiv};
 use super::layers::{DepthImage, LayerPlan};
 use super::scratch::Scratch;
 use super::strip::{LayerCx, LayerTaps, layer_macs, run_strip};
 use super::uniform::UNIFORM_TILE;
 use crate::config::DofCfg;
-use crate::fixed::round_shift;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
@@ -147,10 +146,11 @@ pub(super) fn passthrough(
                 continue;
             }
             let (a, b) = (u128::from(a), u128::from(b));
-            let v = u128::from(value[x]) * a;
             n += 1;
-            let col = round_shift(((v << g) / a) as i128, 0, p.quant) as u128;
-            let aq = (a << q) / b;
+            // The identity mask's sums are `value * a` and `a`: the colour divide
+            // `(value * a << g) / a` is exact, `value << g`.
+            let col = u128::from(value[x]) << g;
+            let aq = udiv(a << q, b);
             composite(&mut o[x0 + x], &mut d[x0 + x], col, aq, one_q, q, p.quant);
         }
     }
