@@ -233,7 +233,8 @@ pub struct Frags<T> {
     pub bounds: Vec<(usize, usize)>,
     /// Primitives listed.
     pub prims: usize,
-    /// Every primitive's pieces, built on the first [`Frags::of`].
+    /// Every primitive's pieces, built on the first [`Frags::of`] (the lists do not change
+    /// once built).
     pub index: OnceLock<PieceIndex>,
 }
 

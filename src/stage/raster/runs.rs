@@ -182,7 +182,8 @@ pub struct FragRuns {
 }
 
 impl FragRuns {
-    /// Primitive `p`'s fragments, in the order the walker emitted them.
+    /// Primitive `p`'s fragments, part by part (rows), each part's in the order the walker
+    /// emitted them.
     pub fn of(&self, p: usize) -> impl Iterator<Item = Frag> + '_ {
         self.runs
             .of(p)
