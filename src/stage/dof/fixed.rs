@@ -540,6 +540,26 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
+        /// The portable and the run-time (AVX2 where the CPU has it) builds of the
+        /// branch-free rounding give the same codes and the same "beyond" answer.
+        #[test]
+        fn round_words_builds_agree(
+            words in proptest::collection::vec(any::<u64>(), 1..64),
+            small in 0u32..40,
+            g in 0u32..=24,
+            q in 0usize..Quant::ALL.len(),
+            limit_shift in 0u32..63,
+        ) {
+            let words: Vec<u64> = words.iter().map(|&v| v >> small).collect();
+            let round = RoundShift::new(g, Quant::ALL[q]);
+            let limit = (1u64 << 62) >> limit_shift;
+            let (mut a, mut b) = (vec![0u32; words.len()], vec![0u32; words.len()]);
+            let beyond = round_words(&words, &mut a, round, limit);
+            prop_assert_eq!(simd::round_words(&words, &mut b, round, limit), beyond);
+            prop_assert_eq!(beyond, words.iter().any(|&v| v > limit));
+            prop_assert_eq!(a, b);
+        }
+
         /// The fast frame quantisation gives the codes and saturation count of the
         /// general quantiser, word by word, for any format, guard bits and rounding.
         #[test]
