@@ -304,6 +304,9 @@ pub(super) fn own_n<const N: usize>(s: &Samples, own0: usize, sw: usize) -> (u32
     (zmin, cov)
 }
 
+/// The most pixel rows a task of the threads accumulates.
+const ROWS_PER_TASK: usize = 8;
+
 /// One pixel row's counts, merged in row order (its codes go straight to the frame).
 pub(super) struct RowOut {
     pub stats: SignalStats,
@@ -388,6 +391,9 @@ pub(super) fn accumulate_build(
         .zip(depth_rows)
         .zip(cov_rows)
         .enumerate()
+        // Tasks of a few rows, so that a thread done early takes over rows from the other
+        // (the rows' work is as uneven as the scene).
+        .with_max_len(ROWS_PER_TASK)
         // A task's rows are consecutive and in order: its scratch keeps each span's block
         // ids for the next row (`BlockIds`; the same ids whatever the tasks).
         .map_init(
