@@ -33,7 +33,6 @@
 
 use super::workload::{Lines, Workload};
 use serde::Serialize;
-use std::collections::VecDeque;
 
 /// What a stage does in a cycle (the VCD `state` code).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,7 +120,7 @@ struct Sim {
     remaining: u64,
     /// The tokens in the stage's pipeline (front: the oldest), each as the value of
     /// `clock` at which its countdown reaches 0.
-    pipe: VecDeque<u64>,
+    pipe: Pipe,
     /// The stage's pipeline clock: cycles in which its countdowns ran (every cycle but the
     /// frozen ones), so that a token's countdown is its entry less `clock`, and running
     /// every countdown is one add.
@@ -140,6 +139,37 @@ struct Sim {
     /// Whether it could not start a token in the last clock because the line buffers were
     /// full (stalled, its pipeline still drains).
     blocked: bool,
+}
+
+/// A FIFO of countdown ends: a list and the index of its front. Tokens leave in the order
+/// they entered, so the list is emptied whenever the front passes its end.
+#[derive(Default)]
+struct Pipe {
+    ends: Vec<u64>,
+    front: usize,
+}
+
+impl Pipe {
+    #[inline]
+    fn front(&self) -> Option<&u64> {
+        self.ends.get(self.front)
+    }
+    #[inline]
+    fn is_empty(&self) -> bool {
+        self.front == self.ends.len()
+    }
+    #[inline]
+    fn pop_front(&mut self) {
+        self.front += 1;
+        if self.is_empty() {
+            self.ends.clear();
+            self.front = 0;
+        }
+    }
+    #[inline]
+    fn push_back(&mut self, end: u64) {
+        self.ends.push(end);
+    }
 }
 
 impl Sim {
@@ -286,7 +316,7 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
                 service,
                 next: 0,
                 remaining: 0,
-                pipe: VecDeque::new(),
+                pipe: Pipe::default(),
                 clock: 0,
                 latency: w.stages[i].timing.latency,
                 occ: 0,
@@ -307,30 +337,34 @@ pub fn simulate(w: &Workload, mut trace: Option<&mut Trace>) -> SimResult {
     let mut t = 0u64;
     loop {
         clock(&mut sims, &mut states);
-        if sims.iter().all(Sim::done) {
-            break;
+        // One pass: whether every stage is done, the FIFO occupancies and the quiet run.
+        let (mut all_done, mut quiet) = (true, u64::MAX);
+        for (i, s) in sims.iter().enumerate() {
+            all_done &= s.done();
+            occ[i] = s.occ;
+            quiet = quiet.min(s.quiet(states[i]));
         }
-        for i in 0..ns {
-            counts[i][states[i] as usize] += 1;
-            occ[i] = sims[i].occ;
-            fifo_max[i] = fifo_max[i].max(occ[i]);
+        if all_done {
+            break;
         }
         if let Some(f) = trace.as_mut() {
             f(t, &states, &occ);
         }
-        t += 1;
-        let quiet = (0..ns).map(|i| sims[i].quiet(states[i])).min().unwrap_or(0);
+        // This clock and the quiet cycles after it (none when every stage waits for
+        // another for ever: a chain whose stages pass different numbers of tokens, which
+        // no run produces and the stepwise reference would loop on; the frame ends here).
+        let run = if quiet == u64::MAX { 1 } else { 1 + quiet };
+        for i in 0..ns {
+            counts[i][states[i] as usize] += run;
+            fifo_max[i] = fifo_max[i].max(occ[i]);
+        }
+        t += run;
         if quiet == u64::MAX {
-            // Every stage waits for another for ever: a chain whose stages pass different
-            // numbers of tokens (no run produces one; the stepwise reference would loop
-            // for ever). The frame ends here.
             break;
         }
-        for i in 0..ns {
-            counts[i][states[i] as usize] += quiet;
-            sims[i].skip(states[i], quiet);
+        for (s, &st) in sims.iter_mut().zip(&states) {
+            s.skip(st, quiet);
         }
-        t += quiet;
     }
     let tokens: Vec<u64> = sims.iter().map(|s| s.service.len() as u64).collect();
     assemble(w, &tokens, &counts, &fifo_max, t, port_bound)
