@@ -162,7 +162,13 @@ pub fn build_in(scene: &Scene, hw: &HwConfig, pool: &Pool) -> Result<Plan> {
     let (decisions, order) = decide(scene, hw)?;
     let t = Instant::now();
     let mut parts = pool.take_lists();
-    let host = front_end_in(scene, &guard, None, (pool.take(0), &mut parts));
+    let host = front_end_in(
+        scene,
+        &guard,
+        None,
+        (pool.take(0), &mut parts),
+        Some(pool.meshes()),
+    );
     pool.give(parts);
     let host_ms = ms_since(t);
     let grid = Grid::new(hw.raster.samples, hw.subpixel_bits(), width, height);

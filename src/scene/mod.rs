@@ -19,6 +19,7 @@
 //!   d the view-space depth (distance along the view axis), so z = 0 at near and 1 at far.
 
 mod anim;
+mod meshes;
 mod parse;
 mod project;
 mod shade;
@@ -30,6 +31,7 @@ use crate::files::{Source, TomlFile};
 use serde::Serialize;
 
 pub use anim::{CameraKey, Interpolation, ObjectKey, Sequence, interpolate};
+pub use meshes::MeshCache;
 pub use project::{
     LensPoint, depth_from_screen_z, front_end, front_end_in, front_end_through, screen_z,
 };

@@ -3,12 +3,13 @@
 
 use super::shade::shade_vertex;
 use super::tessellate::tessellate;
+use std::sync::Arc;
 
 mod mesh;
 use super::vec3::{V3, add, cross, dot, lerp3, normalize, scale, sub};
 use super::{
-    Camera, FrontEndStats, GuardBand, HostScene, Material, Object, Primitive, Rgb, Scene,
-    ScreenVertex, Space,
+    Camera, FrontEndStats, GuardBand, HostScene, Material, MeshCache, Object, Primitive, Rgb,
+    Scene, ScreenVertex, Space,
 };
 
 /// Screen depth of a view-space depth d (distance along the view axis):
@@ -415,28 +416,31 @@ pub fn front_end(scene: &Scene, guard: &GuardBand) -> HostScene {
 /// fixed, and screen-space objects moved by the parallax of their depth. The guard-band clip
 /// comes after the shear, so every view is clipped in its own screen.
 pub fn front_end_through(scene: &Scene, guard: &GuardBand, lens: Option<LensPoint>) -> HostScene {
-    front_end_in(scene, guard, lens, (Vec::new(), &mut Vec::new()))
+    front_end_in(scene, guard, lens, (Vec::new(), &mut Vec::new()), None)
 }
 
 /// Triangles (and vertices) of a mesh per part of its emission on the threads (see
-/// [`front_end_in`]): the default scene's meshes fit one part and run serially.
-const PART: usize = 4096;
+/// [`front_end_in`]): the default scene's sphere and torus (4096 triangles each) run in
+/// four parts each.
+const PART: usize = 1024;
 
 /// [`front_end_through`] emitting the primitives into `prims` (cleared first: a list kept
 /// from an earlier frame, so that a run of frames does not allocate it again).
 ///
-/// A mesh of more than 4096 triangles is shaded and its triangles culled, projected and
-/// clipped on the threads, in parts of 4096 triangles, each into its own list of
+/// A mesh of more than 1024 triangles is shaded and its triangles culled, projected and
+/// clipped on the threads, in parts of 1024 triangles, each into its own list of
 /// `parts` (kept by the caller across frames, like `prims`); the parts are then appended in
 /// order. The primitives and counts are the serial ones whatever the threads: every
-/// triangle is emitted alone, and the parts keep the tessellation order.
+/// triangle is emitted alone, and the parts keep the tessellation order. With `meshes`,
+/// an object tessellated in an earlier frame of the run gets its mesh from there.
 pub fn front_end_in(
     scene: &Scene,
     guard: &GuardBand,
     lens: Option<LensPoint>,
     lists: (Vec<Primitive>, &mut Vec<Vec<Primitive>>),
+    meshes: Option<&MeshCache>,
 ) -> HostScene {
-    front_end_parts(scene, guard, lens, lists, PART)
+    front_end_parts(scene, guard, lens, lists, (PART, meshes))
 }
 
 /// [`front_end_in`] with parts of `part` triangles.
@@ -445,7 +449,7 @@ fn front_end_parts(
     guard: &GuardBand,
     lens: Option<LensPoint>,
     (mut prims, parts): (Vec<Primitive>, &mut Vec<Vec<Primitive>>),
-    part: usize,
+    (part, meshes): (usize, Option<&MeshCache>),
 ) -> HostScene {
     prims.clear();
     let view = View::new(&scene.camera, scene.image.width, scene.image.height, lens);
@@ -466,7 +470,11 @@ fn front_end_parts(
             | Object::Torus { material, .. }
             | Object::Cone { material, .. }
             | Object::Cylinder { material, .. } => {
-                let mesh = tessellate(object).expect("canonical objects tessellate");
+                let mesh = match meshes {
+                    Some(m) => m.mesh(object),
+                    None => tessellate(object).map(Arc::new),
+                }
+                .expect("canonical objects tessellate");
                 mesh::emit(&mut out, &mesh, |p, n| shade(p, n, material), (parts, part));
             }
             Object::Triangle {

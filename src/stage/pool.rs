@@ -9,6 +9,7 @@
 //! [`Pool::recycle`]. A one-shot run uses an empty pool, which only allocates.
 
 use super::{Memo, Taps};
+use crate::scene::MeshCache;
 use rayon::prelude::*;
 use std::any::{Any, TypeId};
 use std::collections::HashMap;
@@ -30,6 +31,7 @@ type MemoEntry = (u64, Arc<dyn Any + Send + Sync>);
 pub struct Pool {
     shelves: Mutex<HashMap<TypeId, Vec<Box<dyn Any + Send>>>>,
     memo: Mutex<Vec<MemoEntry>>,
+    meshes: MeshCache,
 }
 
 impl std::fmt::Debug for Pool {
@@ -44,6 +46,11 @@ impl Pool {
     /// An empty pool.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// The meshes of the canonical objects met in the run's frames (the host front end's).
+    pub fn meshes(&self) -> &MeshCache {
+        &self.meshes
     }
 
     /// Buffers held.

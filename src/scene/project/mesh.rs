@@ -84,12 +84,12 @@ pub(super) fn emit(
 #[cfg(test)]
 mod tests {
     use super::super::front_end_parts;
-    use crate::scene::{GuardBand, LensPoint, Scene};
+    use crate::scene::{GuardBand, LensPoint, MeshCache, Scene};
 
     /// Meshes emitted in parts on the threads give the serial primitives and counts: the
     /// default scene's meshes in parts of 7 triangles against one part per mesh, through
     /// the pinhole and a lens point, with a guard band that clips, and again on the part
-    /// lists the first run left (a second frame).
+    /// lists and the meshes the first run left (a second frame).
     #[test]
     fn parts_give_the_serial_emission() {
         let scene = Scene::embedded("default").expect("embedded scene");
@@ -106,17 +106,24 @@ mod tests {
             jitter: (0.25, -0.5),
         };
         let mut parts = vec![Vec::new(); 2];
+        let cache = MeshCache::new();
         for lens in [None, Some(lens)] {
             let serial = front_end_parts(
                 &scene,
                 &guard,
                 lens,
                 (Vec::new(), &mut Vec::new()),
-                usize::MAX,
+                (usize::MAX, None),
             );
             assert!(serial.stats.clipped_guard > 0 && serial.stats.culled_backfaces > 0);
             for _ in 0..2 {
-                let split = front_end_parts(&scene, &guard, lens, (Vec::new(), &mut parts), 7);
+                let split = front_end_parts(
+                    &scene,
+                    &guard,
+                    lens,
+                    (Vec::new(), &mut parts),
+                    (7, Some(&cache)),
+                );
                 assert!(parts.len() > 500, "{} parts", parts.len());
                 assert_eq!(split, serial);
             }
