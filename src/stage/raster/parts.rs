@@ -108,6 +108,8 @@ pub fn walk(
         .par_iter()
         .zip(per_band)
         .enumerate()
+        // One band per task: a thread done early takes the next band.
+        .with_max_len(1)
         .map(|(b, (&rows, (data, spans)))| {
             data.iter_mut().for_each(Vec::clear);
             spans.iter_mut().for_each(Vec::clear);

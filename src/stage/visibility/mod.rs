@@ -336,6 +336,8 @@ impl Stage for Visibility {
         let done: Vec<(VisWork, Vec<(u32, u64)>)> = cut
             .into_par_iter()
             .zip(frags.runs.parts.par_iter().zip(&frags.runs.spans))
+            // One part per task: a thread done early takes the next part.
+            .with_max_len(1)
             .map(|(mut part, (data, spans))| {
                 part.clear(&bg_codes);
                 let mut wk = VisWork::default();
