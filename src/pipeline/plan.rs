@@ -24,6 +24,7 @@ use crate::fnv::Fnv;
 use crate::scene::{GuardBand, HostScene, Scene, front_end_in};
 use crate::stage::accumulate::{Kernel, kernel, regions};
 use crate::stage::{self, Grid, Layout, Need, Pool, Region, StageId, Tiles, input, ms_since};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -150,6 +151,9 @@ pub fn decide(scene: &Scene, hw: &HwConfig) -> Result<(Vec<Decision>, Vec<StageI
     Ok((decisions, order))
 }
 
+/// Primitives per part of the tile binning on the threads.
+const BIN_PART: usize = 1024;
+
 /// Builds the plan: decisions, host front end, region and tiles.
 pub fn build(scene: &Scene, hw: &HwConfig) -> Result<Plan> {
     build_in(scene, hw, &Pool::new())
@@ -177,17 +181,30 @@ pub fn build_in(scene: &Scene, hw: &HwConfig, pool: &Pool) -> Result<Plan> {
     let kernel = kernel(hw);
     let (region, samples) = regions(&prints, &kernel, width, height);
     let mut tiles = Tiles::new(hw.cycles.tile, width, height);
-    for f in &prints {
-        let b = Region::of_box(&f.pixels, &screen);
-        match &f.triangle {
-            // A triangle bins only to the tiles whose filter windows' samples it meets.
-            Some(t) => {
-                let window = |r: &Region| sample_window(r, &grid, &kernel);
-                tiles.bin_if(&b, &region, |r| input::triangle_meets(t, window(r)));
+    // On the threads, a map of binned tiles per part of the primitives, merged: a tile is
+    // binned when any primitive bins it, whatever the parts.
+    let bin = |prints: &[input::Footprint]| {
+        let mut part = Tiles::new(hw.cycles.tile, width, height);
+        for f in prints {
+            let b = Region::of_box(&f.pixels, &screen);
+            match &f.triangle {
+                // A triangle bins only to the tiles whose filter windows' samples it meets.
+                Some(t) => {
+                    let window = |r: &Region| sample_window(r, &grid, &kernel);
+                    part.bin_if(&b, &region, |r| input::triangle_meets(t, window(r)));
+                }
+                None => part.bin(&b, &region),
             }
-            None => tiles.bin(&b, &region),
         }
-    }
+        part.touched
+    };
+    tiles.touched = prints.par_chunks(BIN_PART).map(bin).reduce(
+        || tiles.touched.clone(),
+        |mut a, b| {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a |= b);
+            a
+        },
+    );
     let key = Fnv::new()
         .str(env!("CARGO_PKG_VERSION"))
         .str(&serde_json::to_string(scene).unwrap_or_default())
