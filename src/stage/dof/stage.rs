@@ -162,15 +162,29 @@ impl Stage for Dof {
         let frame = &input.frame;
         let lens = LensMap::of(cx.scene, hw, frame.height)
             .expect("the plan runs dof for a thin lens only");
-        let (plan, out, mut facts) = match hw.dof.kind {
-            DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered)?,
-            DofKind::Luminance => {
-                let g = hw.dof.luminance.guard_bits;
-                let luma = taps.channels.as_deref().map(|ch| Arc::new(luma_of(ch, g)));
-                run(&Luminance { luma }, cx, frame, &lens, MethodPlan::Luminance)?
-            }
-            DofKind::Downsample => run(&Downsample, cx, frame, &lens, MethodPlan::Downsample)?,
-        };
+        // The output frame's depth and coverage are the input's: copied while the layers
+        // run (the buffers are taken first, so the pool hands them out in a fixed order).
+        let (mut depth, mut coverage) = (
+            cx.pool.take(frame.depth.len()),
+            cx.pool.take(frame.coverage.len()),
+        );
+        let channels = taps.channels.as_deref();
+        let (blurred, ()) = rayon::join(
+            || match hw.dof.kind {
+                DofKind::Layered => run(&Layered, cx, frame, &lens, MethodPlan::Layered),
+                DofKind::Luminance => {
+                    let g = hw.dof.luminance.guard_bits;
+                    let luma = channels.map(|ch| Arc::new(luma_of(ch, g)));
+                    run(&Luminance { luma }, cx, frame, &lens, MethodPlan::Luminance)
+                }
+                DofKind::Downsample => run(&Downsample, cx, frame, &lens, MethodPlan::Downsample),
+            },
+            || {
+                depth.extend_from_slice(&frame.depth);
+                coverage.extend_from_slice(&frame.coverage);
+            },
+        );
+        let (plan, out, mut facts) = blurred?;
         if let Some(pot) = &pot {
             facts.work.push(("potentiations", frame.acc.len() as u64));
             facts.signals.push(pot.stats.clone());
@@ -185,8 +199,8 @@ impl Stage for Dof {
         facts.note("object_pixels_in_focus", in_focus);
         let next = Frame {
             acc: out,
-            depth: cx.pool.copy(&frame.depth),
-            coverage: cx.pool.copy(&frame.coverage),
+            depth,
+            coverage,
             ..*frame
         };
         taps.fixed.frame = Some(Arc::new(FrameTap {
