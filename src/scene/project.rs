@@ -432,7 +432,7 @@ const PART: usize = 1024;
 /// `parts` (kept by the caller across frames, like `prims`); the parts are then appended in
 /// order. The primitives and counts are the serial ones whatever the threads: every
 /// triangle is emitted alone, and the parts keep the tessellation order. With `meshes`,
-/// an object tessellated in an earlier frame of the run gets its mesh from there.
+/// an object tessellated in the frame before gets its mesh from there.
 pub fn front_end_in(
     scene: &Scene,
     guard: &GuardBand,
@@ -464,6 +464,9 @@ fn front_end_parts(
         stats: FrontEndStats::default(),
     };
     out.stats.objects = scene.objects.len();
+    if let Some(m) = meshes {
+        m.next_frame();
+    }
     for object in &scene.objects {
         match object {
             Object::Sphere { material, .. }
