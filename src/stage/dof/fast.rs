@@ -146,6 +146,23 @@ pub(super) fn hsum_run<W: Word, P: Plane>(
     }
 }
 
+/// The horizontal sums of the positions `xa..xb` of one row whose window is uniform and
+/// full: each plane's sample times its column's in-box tap sum `bs` (the taps read one value
+/// throughout).
+#[inline]
+pub(super) fn scale_run<W: Word, P: Plane>(
+    (rx, ra, rd): (&[P], &[P], &[P]),
+    bs: &[u64],
+    (xa, xb): (usize, usize),
+    (ox, oa, od): (&mut [W], &mut [W], &mut [W]),
+) {
+    for x in xa..xb {
+        let b = W::of(u128::from(bs[x]));
+        let v = |p: &[P]| W::of(u128::from(p[x].get())) * b;
+        (ox[x], oa[x], od[x]) = (v(rx), v(ra), v(rd));
+    }
+}
+
 /// The vertical pass of output row `y` of a `bw x bh` box over the columns `xa..xb`: the
 /// exact colour, alpha and behind sums into `o` (indexed by column).
 #[inline]

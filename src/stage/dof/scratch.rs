@@ -41,10 +41,7 @@ impl RowSums {
         y: usize,
         class: &[u8],
     ) {
-        for_runs(class, |k, xa, xb| {
-            if k != uniform::MIXED {
-                return;
-            }
+        for (_, xa, xb) in runs(class).filter(|r| r.0 == uniform::MIXED) {
             if self.is_wide {
                 let o = &mut self.wide;
                 fast::vsum_row(c, planes, dim, y, (xa, xb), (&mut o.0, &mut o.1, &mut o.2));
@@ -52,25 +49,71 @@ impl RowSums {
                 let o = &mut self.narrow;
                 fast::vsum_row(c, planes, dim, y, (xa, xb), (&mut o.0, &mut o.1, &mut o.2));
             }
-        });
+        }
     }
 
-    /// The horizontal sums of one row (`planes`) at every position whose row window
-    /// (`class`) is not [`uniform::FULL`].
-    pub(super) fn hfill<P: Plane>(&mut self, c: &[P], planes: (&[P], &[P], &[P]), class: &[u8]) {
-        for_runs(class, |k, xa, xb| {
-            if k == uniform::FULL {
-                return;
-            }
+    /// The horizontal sums of one row (`planes`) at every position: a position whose row
+    /// window (`class`) is [`uniform::FULL`] sums to its sample times the in-box tap sum of
+    /// its column (`bsx`, no MACs), the others by their taps.
+    pub(super) fn hfill<P: Plane>(
+        &mut self,
+        c: &[P],
+        planes: (&[P], &[P], &[P]),
+        class: &[u8],
+        bsx: &[u64],
+    ) {
+        for (k, xa, xb) in runs(class) {
             let zero = k == uniform::ZERO;
-            if self.is_wide {
-                let o = &mut self.wide;
-                fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
-            } else {
-                let o = &mut self.narrow;
-                fast::hsum_run(c, planes, (xa, xb), zero, (&mut o.0, &mut o.1, &mut o.2));
+            macro_rules! run {
+                ($o:expr) => {{
+                    let o = $o;
+                    let out = (&mut o.0[..], &mut o.1[..], &mut o.2[..]);
+                    if k == uniform::FULL {
+                        fast::scale_run(planes, bsx, (xa, xb), out);
+                    } else {
+                        fast::hsum_run(c, planes, (xa, xb), zero, out);
+                    }
+                }};
             }
-        });
+            if self.is_wide {
+                run!(&mut self.wide)
+            } else {
+                run!(&mut self.narrow)
+            }
+        }
+    }
+
+    /// The row's sums into plane words: the colour saturated at `max`, alpha and behind as
+    /// they are (they fit, docs/dof.md). Returns the colour sums above `max` and the largest
+    /// colour or behind word written.
+    pub(super) fn saturate<P: Plane>(
+        &self,
+        max: u128,
+        (hx, ha, hd): (&mut [P], &mut [P], &mut [P]),
+    ) -> (u64, u64) {
+        let (mut over, mut top) = (0u64, 0u64);
+        if self.is_wide {
+            let (sx, sa, sd) = &self.wide;
+            for x in 0..hx.len() {
+                let v = sx[x].min(max) as u64;
+                over += u64::from(sx[x] > max);
+                (hx[x], ha[x], hd[x]) = (P::put(v), P::put(sa[x] as u64), P::put(sd[x] as u64));
+                top = top.max(v).max(sd[x] as u64);
+            }
+        } else {
+            // Narrow sums are below 2^64: so is the saturated colour.
+            let max = max.min(u128::from(u64::MAX)) as u64;
+            let (sx, sa, sd) = &self.narrow;
+            let n = hx.len();
+            let (sx, sa, sd) = (&sx[..n], &sa[..n], &sd[..n]);
+            for x in 0..n {
+                let v = sx[x].min(max);
+                over += u64::from(sx[x] > max);
+                (hx[x], ha[x], hd[x]) = (P::put(v), P::put(sa[x]), P::put(sd[x]));
+                top = top.max(v).max(sd[x]);
+            }
+        }
+        (over, top)
     }
 
     pub(super) fn get(&self, x: usize) -> (u128, u128, u128) {
@@ -83,16 +126,29 @@ impl RowSums {
     }
 }
 
-/// `f(k, xa, xb)` for every maximal run `xa..xb` of one class `k` in `class`, in one scan.
-fn for_runs(class: &[u8], mut f: impl FnMut(u8, usize, usize)) {
+/// Every maximal run `(k, xa, xb)` of one class `k` in `class`, in order.
+pub(super) fn runs(class: &[u8]) -> impl Iterator<Item = (u8, usize, usize)> + '_ {
     let mut x = 0;
-    while x < class.len() {
-        let (k, xa) = (class[x], x);
-        while x < class.len() && class[x] == k {
-            x += 1;
+    std::iter::from_fn(move || {
+        let (&k, xa) = (class.get(x)?, x);
+        x += run_len(&class[x..], k);
+        Some((k, xa, x))
+    })
+}
+
+/// How many bytes `s` starts with that equal `k`, eight at a time.
+fn run_len(s: &[u8], k: u8) -> usize {
+    let all = u64::from_ne_bytes([k; 8]);
+    let mut chunks = s.chunks_exact(8);
+    let mut n = 0;
+    for c in chunks.by_ref() {
+        let d = u64::from_le_bytes(c.try_into().expect("8 bytes")) ^ all;
+        if d != 0 {
+            return n + d.trailing_zeros() as usize / 8;
         }
-        f(k, xa, x);
+        n += 8;
     }
+    n + chunks.remainder().iter().take_while(|&&c| c == k).count()
 }
 
 /// A layer's planes over a strip of its box, kept between strips and layers (one
@@ -165,6 +221,28 @@ impl<P: Plane> Scratch<P> {
                     _ => uniform::MIXED,
                 };
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The runs cover the row in order, each maximal and of one class.
+        #[test]
+        fn runs_are_maximal(class in proptest::collection::vec(0u8..3, 0..40)) {
+            let mut end = 0;
+            for (k, xa, xb) in runs(&class) {
+                prop_assert_eq!(xa, end);
+                prop_assert!(xa < xb);
+                prop_assert!(class[xa..xb].iter().all(|&c| c == k));
+                prop_assert!(class.get(xb) != Some(&k));
+                end = xb;
+            }
+            prop_assert_eq!(end, class.len());
         }
     }
 }

@@ -8,7 +8,7 @@
 use super::fast::{self, Plane};
 use super::fixed::{DofWork, Exec, LayerPlanes, border_sums, composite, planes, row_mac, udiv};
 use super::layers::{DepthImage, LayerPlan};
-use super::scratch::Scratch;
+use super::scratch::{Scratch, runs};
 use super::uniform;
 use crate::config::{AlphaNorm, DofCfg};
 use crate::fixed::Overflow;
@@ -180,9 +180,11 @@ pub(super) fn run_strip<P: Plane>(
             0 => line_max,
             b => line_max.min(acc_max / b as u128),
         };
+        // `lim` fits a u64 (`line_bits` <= 64), so a product above u64 is above it.
+        let lim = lim as u64;
         let cols = bsx.iter().zip(&wx[x0..x0 + bw]);
         for ((u, xi), (&bx, &wxx)) in u.iter_mut().zip(xi).zip(cols) {
-            if !(bx == wxx && xi.get() as u128 * bx as u128 <= lim) {
+            if !(bx == wxx && xi.get().checked_mul(bx).is_some_and(|v| v <= lim)) {
                 demote(u);
             }
         }
@@ -214,39 +216,38 @@ pub(super) fn run_strip<P: Plane>(
     for yy in 0..eh {
         let row = yy * bw..(yy + 1) * bw;
         let (rx, ra, rd) = (&xi[row.clone()], &ai[row.clone()], &di[row.clone()]);
-        let hr = &hu[row.clone()];
-        let (hx, ha, hd) = (&mut hx[row.clone()], &mut ha[row.clone()], &mut hd[row]);
+        let (hx, ha, hd) = (
+            &mut hx[row.clone()],
+            &mut ha[row.clone()],
+            &mut hd[row.clone()],
+        );
         // Rows of the neighbouring strips are computed again, counted there.
         let counted = (r0..r1).contains(&(e0 + yy));
-        if exec != Exec::Full {
-            s.hrow.hfill(cp, (rx, ra, rd), hr);
-        }
-        for x in 0..bw {
-            let r = match exec {
-                Exec::Full => row_mac(c, x, bw, line_max, |i| {
-                    (
-                        rx[i].get() as u128,
-                        ra[i].get() as u128,
-                        rd[i].get() as u128,
-                    )
-                }),
-                _ if hr[x] == uniform::FULL => {
-                    let b = bsx[x] as u128;
-                    let v = |p: &[P]| p[x].get() as u128 * b;
-                    fast::mac_out((v(rx), v(ra), v(rd)), line_max)
-                }
-                _ => fast::mac_out(s.hrow.get(x), line_max),
-            };
-            if r.overflow && counted {
-                work.line_overflows += 1;
-                if p.overflow == Overflow::Error {
-                    return Err(("dof.line".into(), p.line_bits));
-                }
+        let overflows = if exec == Exec::Full {
+            let mut n = 0;
+            for x in 0..bw {
+                let r = row_mac(c, x, bw, line_max, |i| {
+                    let v = |p: &[P]| p[i].get() as u128;
+                    (v(rx), v(ra), v(rd))
+                });
+                n += u64::from(r.overflow);
+                hx[x] = P::put(r.x as u64);
+                ha[x] = P::put(r.a as u64);
+                hd[x] = P::put(r.d as u64);
+                hmax = hmax.max(r.x as u64).max(r.d as u64);
             }
-            hx[x] = P::put(r.x as u64);
-            ha[x] = P::put(r.a as u64);
-            hd[x] = P::put(r.d as u64);
-            hmax = hmax.max(r.x as u64).max(r.d as u64);
+            n
+        } else {
+            s.hrow.hfill(cp, (rx, ra, rd), &hu[row], bsx);
+            let (n, top) = s.hrow.saturate(line_max, (hx, ha, hd));
+            hmax = hmax.max(top);
+            n
+        };
+        if overflows > 0 && counted {
+            work.line_overflows += overflows;
+            if p.overflow == Overflow::Error {
+                return Err(("dof.line".into(), p.line_bits));
+            }
         }
     }
     let (hx, ha, hd) = (&hx[..], &ha[..], &hd[..]);
@@ -279,67 +280,66 @@ pub(super) fn run_strip<P: Plane>(
     for y in r0..r1 {
         let yy = y - e0;
         let ur = &u[yy * bw..(yy + 1) * bw];
-        if exec != Exec::Full {
+        let orow = (y - r0) * w + x0..(y - r0) * w + x0 + bw;
+        let (out, def) = (&mut out[orow.clone()], &mut def[orow]);
+        let skip = |x: usize| tile_skip.as_ref().is_some_and(|t| t[(y - r0) * bw + x]);
+        // The whole row as one mixed run for the reference, else by window class.
+        let full = exec == Exec::Full;
+        if !full {
             s.rows.fill(cp, (hx, ha, hd), (bw, eh), yy, ur);
         }
-        for x in 0..bw {
-            let i = yy * bw + x;
-            let pi = (y - r0) * w + x + x0;
-            let skip = tile_skip.as_ref().is_some_and(|t| t[(y - r0) * bw + x]);
-            if exec != Exec::Full && ur[x] == uniform::ZERO {
+        let whole = full.then_some((uniform::MIXED, 0, bw));
+        for (k, xa, xb) in whole.into_iter().chain(runs(ur).filter(|_| !full)) {
+            match k {
                 // Zero window: no colour and no alpha, nothing to composite.
-                continue;
-            }
-            if exec != Exec::Full && ur[x] == uniform::FULL {
-                // Full window: colour v exactly, alpha one (docs/dof.md).
-                if !skip {
-                    work.divides += 1;
+                uniform::ZERO => {}
+                // Full window: colour v exactly, alpha one (docs/dof.md), so the composite
+                // writes the colour.
+                uniform::FULL => {
+                    let v = &val[yy * bw + xa..yy * bw + xb];
+                    for (o, &v) in out[xa..xb].iter_mut().zip(v) {
+                        *o = u64::from(v) << g;
+                    }
+                    def[xa..xb].fill(true);
+                    work.divides += (xa..xb).filter(|&x| !skip(x)).count() as u64;
+                    work.composites += (xb - xa) as u64;
                 }
-                composite(
-                    &mut out[pi],
-                    &mut def[pi],
-                    (val[i] as u128) << g,
-                    one_q,
-                    one_q,
-                    q,
-                    p.quant,
-                );
-                work.composites += 1;
-                continue;
-            }
-            let r = match exec {
-                Exec::Full => row_mac(c, yy, eh, acc_max, |i| {
-                    let j = i * bw + x;
-                    (
-                        hx[j].get() as u128,
-                        ha[j].get() as u128,
-                        hd[j].get() as u128,
-                    )
-                }),
-                _ => fast::mac_out(s.rows.get(x), acc_max),
-            };
-            if r.overflow {
-                work.acc_overflows += 1;
-                if p.overflow == Overflow::Error {
-                    return Err(("dof.acc".into(), p.acc_bits));
+                _ => {
+                    for x in xa..xb {
+                        let r = match exec {
+                            Exec::Full => row_mac(c, yy, eh, acc_max, |i| {
+                                let v = |p: &[P]| p[i * bw + x].get() as u128;
+                                (v(hx), v(ha), v(hd))
+                            }),
+                            _ => fast::mac_out(s.rows.get(x), acc_max),
+                        };
+                        if r.overflow {
+                            work.acc_overflows += 1;
+                            if p.overflow == Overflow::Error {
+                                return Err(("dof.acc".into(), p.acc_bits));
+                            }
+                        }
+                        let (sx, sa, sd) = (r.x, r.a, r.d);
+                        if sa == 0 {
+                            continue;
+                        }
+                        if !skip(x) {
+                            work.divides += 1;
+                        }
+                        // colour = round(F 2^g / A): half-up integer divide
+                        let col = udiv(sx << (g + 1), sa).div_ceil(2);
+                        let ws = match plan.alpha_norm {
+                            AlphaNorm::Behind => sd,
+                            AlphaNorm::Image => {
+                                wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128
+                            }
+                        };
+                        let aq = udiv(sa << (q + 1), ws).div_ceil(2).min(one_q);
+                        composite(&mut out[x], &mut def[x], col, aq, one_q, q, p.quant);
+                        work.composites += 1;
+                    }
                 }
             }
-            let (sx, sa, sd) = (r.x, r.a, r.d);
-            if sa == 0 {
-                continue;
-            }
-            if !skip {
-                work.divides += 1;
-            }
-            // colour = round(F 2^g / A): half-up integer divide
-            let col = udiv(sx << (g + 1), sa).div_ceil(2);
-            let ws = match plan.alpha_norm {
-                AlphaNorm::Behind => sd,
-                AlphaNorm::Image => wx[x + x0] as u128 * wy[y + y0] as u128 * img.n2 as u128,
-            };
-            let aq = udiv(sa << (q + 1), ws).div_ceil(2).min(one_q);
-            composite(&mut out[pi], &mut def[pi], col, aq, one_q, q, p.quant);
-            work.composites += 1;
         }
     }
     Ok(())

@@ -25,7 +25,6 @@ pub(super) struct Windows {
     /// The class of the whole window (`hu` of that class on every row of `[y-M, y+M]`, and
     /// for [`FULL`] the same value).
     pub u: Vec<u8>,
-    left: Vec<u32>,
     top: Vec<u32>,
 }
 
@@ -44,64 +43,67 @@ impl Windows {
         val: &[T],
     ) {
         let n = bw * bh;
-        let reset = |v: &mut Vec<u8>| {
-            v.clear();
-            v.resize(n, MIXED);
-        };
-        reset(&mut self.hu);
-        reset(&mut self.u);
+        // Every word of the three planes is written below.
+        self.hu.resize(n, MIXED);
+        self.u.resize(n, MIXED);
+        self.top.resize(n, NONE);
         if bw == 0 || bh == 0 {
             return;
         }
-        let (hu, u) = (&mut self.hu, &mut self.u);
-        // Two neighbours continue a run: one class, not mixed, and for full one value.
-        let joins = |c: u8, d: u8, i: usize, j: usize| c == d && (c == ZERO || val[i] == val[j]);
-        // Per row: the start of the run holding each pixel.
-        let left = &mut self.left;
-        left.clear();
-        left.resize(bw, NONE);
-        for y in 0..bh {
-            let (o, c) = (y * bw, &class[y * bw..(y + 1) * bw]);
-            for x in 0..bw {
-                left[x] = if c[x] == MIXED {
-                    NONE
-                } else if x > 0 && joins(c[x - 1], c[x], o + x - 1, o + x) {
-                    left[x - 1]
-                } else {
-                    x as u32
-                };
-            }
-            let row = &mut hu[o..o + bw];
-            for (x, h) in row.iter_mut().enumerate() {
-                let (xl, xr) = (x.saturating_sub(m), (x + m).min(bw - 1));
-                if left[xr] != NONE && left[xr] as usize <= xl {
-                    *h = c[x];
+        let (hu, u, top) = (&mut self.hu, &mut self.u, &mut self.top);
+        // Per row, per run of joined pixels `[a, b)` (one class, not mixed, and for full one
+        // value): the pixels whose clipped window `[x-M, x+M]` lies in the run.
+        for ((row, c), v) in hu
+            .chunks_exact_mut(bw)
+            .zip(class.chunks_exact(bw))
+            .zip(val.chunks_exact(bw))
+        {
+            row.fill(MIXED);
+            let mut a = 0;
+            while a < bw {
+                let k = c[a];
+                let mut b = a + 1;
+                while b < bw && c[b] == k && (k == ZERO || k == MIXED || v[b] == v[b - 1]) {
+                    b += 1;
                 }
+                if k != MIXED {
+                    let lo = if a == 0 { 0 } else { a + m };
+                    let hi = if b == bw { bw } else { b.saturating_sub(m) };
+                    if lo < hi {
+                        row[lo..hi].fill(k);
+                    }
+                }
+                a = b;
             }
         }
-        // Per column: the start of the run of `hu` windows holding each pixel.
-        let top = &mut self.top;
-        top.clear();
-        top.resize(n, NONE);
-        for y in 0..bh {
+        // Per column: the start of the run of `hu` windows holding each pixel (the same
+        // joins), row after row.
+        for (x, t) in top[..bw].iter_mut().enumerate() {
+            *t = if hu[x] == MIXED { NONE } else { 0 };
+        }
+        for y in 1..bh {
+            let (o, p) = (y * bw, (y - 1) * bw);
+            let (above, here) = top.split_at_mut(o);
+            let (above, here) = (&above[p..], &mut here[..bw]);
+            let (hp, hc) = (&hu[p..o], &hu[o..o + bw]);
+            let (vp, vc) = (&val[p..o], &val[o..o + bw]);
             for x in 0..bw {
-                let i = y * bw + x;
-                top[i] = if hu[i] == MIXED {
-                    NONE
-                } else if y > 0 && joins(hu[i - bw], hu[i], i - bw, i) {
-                    top[i - bw]
-                } else {
-                    y as u32
+                let joins = hc[x] == hp[x] && (hc[x] == ZERO || vc[x] == vp[x]);
+                here[x] = match (hc[x], joins) {
+                    (MIXED, _) => NONE,
+                    (_, true) => above[x],
+                    _ => y as u32,
                 };
             }
         }
+        // A window is uniform where the run holding its bottom row starts at its top row
+        // or above (`NONE` never does).
         for y in 0..bh {
-            let (yt, yb) = (y.saturating_sub(m), (y + m).min(bh - 1));
+            let (yt, yb) = (y.saturating_sub(m) as u32, (y + m).min(bh - 1));
+            let t = &top[yb * bw..(yb + 1) * bw];
+            let (h, u) = (&hu[y * bw..(y + 1) * bw], &mut u[y * bw..(y + 1) * bw]);
             for x in 0..bw {
-                let t = top[yb * bw + x];
-                if t != NONE && t as usize <= yt {
-                    u[y * bw + x] = hu[y * bw + x];
-                }
+                u[x] = if t[x] <= yt { h[x] } else { MIXED };
             }
         }
     }
