@@ -76,6 +76,14 @@ impl Plane for u64 {
     }
 }
 
+/// Whether the CPU runs AVX2 (the tap loops then multiply four words at a time; the same
+/// integers either way).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) fn has_avx2() -> bool {
+    std::arch::is_x86_feature_detected!("avx2")
+}
+
 /// Whether sums of `max * 2^f` fit a `u64` (the taps sum to `2^f`).
 pub(super) fn fits_u64(max: u128, f: u32) -> bool {
     max.checked_shl(f)
@@ -84,7 +92,7 @@ pub(super) fn fits_u64(max: u128, f: u32) -> bool {
 
 /// The horizontal pass of one row (`bw` samples of the colour, alpha and behind planes,
 /// taps `c`) at position `x`: the exact sums (before saturation).
-#[inline]
+#[inline(always)]
 pub(super) fn hsum<W: Word, P: Plane>(
     c: &[P],
     (rx, ra, rd): (&[P], &[P], &[P]),
@@ -115,7 +123,7 @@ pub(super) fn hsum<W: Word, P: Plane>(
 /// [`hsum`]) into `o` (indexed by position); with `zero` (no share in any row window of the
 /// run) only the behind sums, the others being zero. Positions whose taps all lie in the row
 /// go [`mac_run`]'s way, the `M` either end [`hsum`]'s.
-#[inline]
+#[inline(always)]
 pub(super) fn hsum_run<W: Word, P: Plane>(
     c: &[P],
     (rx, ra, rd): (&[P], &[P], &[P]),
@@ -149,7 +157,7 @@ pub(super) fn hsum_run<W: Word, P: Plane>(
 /// The horizontal sums of the positions `xa..xb` of one row whose window is uniform and
 /// full: each plane's sample times its column's in-box tap sum `bs` (the taps read one value
 /// throughout).
-#[inline]
+#[inline(always)]
 pub(super) fn scale_run<W: Word, P: Plane>(
     (rx, ra, rd): (&[P], &[P], &[P]),
     bs: &[u64],
@@ -165,7 +173,7 @@ pub(super) fn scale_run<W: Word, P: Plane>(
 
 /// The vertical pass of output row `y` of a `bw x bh` box over the columns `xa..xb`: the
 /// exact colour, alpha and behind sums into `o` (indexed by column).
-#[inline]
+#[inline(always)]
 pub(super) fn vsum_row<W: Word, P: Plane>(
     c: &[P],
     (hx, ha, hd): (&[P], &[P], &[P]),

@@ -7,6 +7,10 @@ use super::fixed::Shares;
 use super::layers::{DepthImage, LayerPlan};
 use super::uniform;
 
+/// The colour, alpha and behind planes of a row (or of rows).
+type Planes<'a, P> = (&'a [P], &'a [P], &'a [P]);
+type PlanesMut<'a, P> = (&'a mut [P], &'a mut [P], &'a mut [P]);
+
 /// One row's exact tap sums (of the horizontal pass, or the vertical) over the positions
 /// whose window needs them.
 #[derive(Default)]
@@ -36,7 +40,36 @@ impl RowSums {
     pub(super) fn fill<P: Plane>(
         &mut self,
         c: &[P],
-        planes: (&[P], &[P], &[P]),
+        planes: Planes<P>,
+        dim: (usize, usize),
+        y: usize,
+        class: &[u8],
+    ) {
+        #[target_feature(enable = "avx2")]
+        #[cfg(target_arch = "x86_64")]
+        fn avx2<P: Plane>(
+            s: &mut RowSums,
+            c: &[P],
+            planes: Planes<P>,
+            dim: (usize, usize),
+            y: usize,
+            class: &[u8],
+        ) {
+            s.fill_in(c, planes, dim, y, class)
+        }
+        #[cfg(target_arch = "x86_64")]
+        if fast::has_avx2() {
+            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
+            return unsafe { avx2(self, c, planes, dim, y, class) };
+        }
+        self.fill_in(c, planes, dim, y, class)
+    }
+
+    #[inline(always)]
+    fn fill_in<P: Plane>(
+        &mut self,
+        c: &[P],
+        planes: Planes<P>,
         dim: (usize, usize),
         y: usize,
         class: &[u8],
@@ -58,10 +91,25 @@ impl RowSums {
     pub(super) fn hfill<P: Plane>(
         &mut self,
         c: &[P],
-        planes: (&[P], &[P], &[P]),
+        planes: Planes<P>,
         class: &[u8],
         bsx: &[u64],
     ) {
+        #[target_feature(enable = "avx2")]
+        #[cfg(target_arch = "x86_64")]
+        fn avx2<P: Plane>(s: &mut RowSums, c: &[P], planes: Planes<P>, class: &[u8], bsx: &[u64]) {
+            s.hfill_in(c, planes, class, bsx)
+        }
+        #[cfg(target_arch = "x86_64")]
+        if fast::has_avx2() {
+            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
+            return unsafe { avx2(self, c, planes, class, bsx) };
+        }
+        self.hfill_in(c, planes, class, bsx)
+    }
+
+    #[inline(always)]
+    fn hfill_in<P: Plane>(&mut self, c: &[P], planes: Planes<P>, class: &[u8], bsx: &[u64]) {
         for (k, xa, xb) in runs(class) {
             let zero = k == uniform::ZERO;
             macro_rules! run {
@@ -86,11 +134,22 @@ impl RowSums {
     /// The row's sums into plane words: the colour saturated at `max`, alpha and behind as
     /// they are (they fit, docs/dof.md). Returns the colour sums above `max` and the largest
     /// colour or behind word written.
-    pub(super) fn saturate<P: Plane>(
-        &self,
-        max: u128,
-        (hx, ha, hd): (&mut [P], &mut [P], &mut [P]),
-    ) -> (u64, u64) {
+    pub(super) fn saturate<P: Plane>(&self, max: u128, out: PlanesMut<P>) -> (u64, u64) {
+        #[target_feature(enable = "avx2")]
+        #[cfg(target_arch = "x86_64")]
+        fn avx2<P: Plane>(s: &RowSums, max: u128, out: PlanesMut<P>) -> (u64, u64) {
+            s.saturate_in(max, out)
+        }
+        #[cfg(target_arch = "x86_64")]
+        if fast::has_avx2() {
+            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
+            return unsafe { avx2(self, max, out) };
+        }
+        self.saturate_in(max, out)
+    }
+
+    #[inline(always)]
+    fn saturate_in<P: Plane>(&self, max: u128, (hx, ha, hd): PlanesMut<P>) -> (u64, u64) {
         let (mut over, mut top) = (0u64, 0u64);
         if self.is_wide {
             let (sx, sa, sd) = &self.wide;
@@ -243,6 +302,46 @@ mod tests {
                 end = xb;
             }
             prop_assert_eq!(end, class.len());
+        }
+
+        /// The run-time (AVX2 where the CPU has it) and the portable builds of the row
+        /// passes give the same sums, saturated words and counts.
+        #[test]
+        fn row_pass_builds_agree(
+            row in proptest::collection::vec((0u32..1 << 20, 0u32..17, 0u32..17, 0u8..3), 1..48),
+            m in 0usize..6,
+            max in 0u128..1 << 40,
+            wide in any::<bool>(),
+        ) {
+            let c: Vec<u32> = (0..=2 * m as u32).map(|t| 1 + t * 37 % 23).collect();
+            let bw = row.len();
+            let x: Vec<u32> = row.iter().map(|r| r.0).collect();
+            let a: Vec<u32> = row.iter().map(|r| r.1).collect();
+            let d: Vec<u32> = row.iter().map(|r| r.2).collect();
+            let class: Vec<u8> = row.iter().map(|r| r.3).collect();
+            let bsx: Vec<u64> = (0..bw).map(|i| 100 + i as u64).collect();
+            let planes = (&x[..], &a[..], &d[..]);
+            let run = |portable: bool| {
+                let mut s = RowSums::default();
+                s.reset(bw, wide);
+                let (mut hx, mut ha, mut hd) = (vec![0u32; bw], vec![0u32; bw], vec![0u32; bw]);
+                let counts = if portable {
+                    s.hfill_in(&c, planes, &class, &bsx);
+                    s.saturate_in(max, (&mut hx, &mut ha, &mut hd))
+                } else {
+                    s.hfill(&c, planes, &class, &bsx);
+                    s.saturate(max, (&mut hx, &mut ha, &mut hd))
+                };
+                let sums: Vec<_> = (0..bw).map(|i| s.get(i)).collect();
+                if portable {
+                    s.fill_in(&c, planes, (bw, 1), 0, &class);
+                } else {
+                    s.fill(&c, planes, (bw, 1), 0, &class);
+                }
+                let vsums: Vec<_> = (0..bw).map(|i| s.get(i)).collect();
+                (sums, counts, hx, ha, hd, vsums)
+            };
+            prop_assert_eq!(run(true), run(false));
         }
     }
 }

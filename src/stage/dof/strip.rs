@@ -205,8 +205,8 @@ pub(super) fn run_strip<P: Plane>(
     // Horizontal pass into the line buffer: a saturated sum fits u64
     // (`line_bits` <= 64) and so does an alpha sum (taps of at most 2^20 times n2).
     let (hx, ha, hd) = (&mut s.hx, &mut s.ha, &mut s.hd);
+    // Every word is written below (no clearing pass).
     for v in [&mut *hx, &mut *ha, &mut *hd] {
-        v.clear();
         v.resize(eh * bw, P::default());
     }
     // `x * m` is at most a u32 code times n2: a bound, not a scan.
