@@ -251,6 +251,33 @@ impl<P: Plane> Scratch<P> {
         img: &DepthImage<u32>,
         plan: &LayerPlan,
         l: usize,
+        rect: (usize, usize, usize, usize),
+    ) {
+        #[target_feature(enable = "avx2")]
+        #[cfg(target_arch = "x86_64")]
+        fn avx2<P: Plane>(
+            s: &mut Scratch<P>,
+            img: &DepthImage<u32>,
+            plan: &LayerPlan,
+            l: usize,
+            rect: (usize, usize, usize, usize),
+        ) {
+            s.input_in(img, plan, l, rect)
+        }
+        #[cfg(target_arch = "x86_64")]
+        if fast::has_avx2() {
+            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
+            return unsafe { avx2(self, img, plan, l, rect) };
+        }
+        self.input_in(img, plan, l, rect)
+    }
+
+    #[inline(always)]
+    fn input_in(
+        &mut self,
+        img: &DepthImage<u32>,
+        plan: &LayerPlan,
+        l: usize,
         (x0, y0, bw, bh): (usize, usize, usize, usize),
     ) {
         let n = bw * bh;

@@ -30,6 +30,9 @@ pub(super) struct Windows {
 
 const NONE: u32 = u32::MAX;
 
+/// A box's width and height, and the mask half-size.
+type Dims = (usize, usize, usize);
+
 impl Windows {
     /// The window classes of half-size `m` over a `bw x bh` box: `class[i]` is the pixel's
     /// ([`FULL`], [`ZERO`] or [`MIXED`] for a partial share), `val[i]` its value (compared
@@ -42,6 +45,21 @@ impl Windows {
         class: &[u8],
         val: &[T],
     ) {
+        #[target_feature(enable = "avx2")]
+        #[cfg(target_arch = "x86_64")]
+        fn avx2<T: Copy + PartialEq>(w: &mut Windows, (bw, bh, m): Dims, class: &[u8], val: &[T]) {
+            w.compute_in((bw, bh, m), class, val)
+        }
+        #[cfg(target_arch = "x86_64")]
+        if super::fast::has_avx2() {
+            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
+            return unsafe { avx2(self, (bw, bh, m), class, val) };
+        }
+        self.compute_in((bw, bh, m), class, val)
+    }
+
+    #[inline(always)]
+    fn compute_in<T: Copy + PartialEq>(&mut self, (bw, bh, m): Dims, class: &[u8], val: &[T]) {
         let n = bw * bh;
         // Every word of the three planes is written below.
         self.hu.resize(n, MIXED);
