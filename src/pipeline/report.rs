@@ -278,11 +278,17 @@ pub(super) fn totals(
     };
     let other = workload(plan, steps, &hw.cycles, other_schedule);
     let workload = chosen;
-    // The two schedules' simulations are independent: one on each thread.
-    let (sim, other_sim) = rayon::join(
-        || cached_sim(&workload, cache),
-        || cached_sim(&other, cache),
-    );
+    // The two schedules' simulations are independent: one on each thread. Without a
+    // streaming stage the schedules chain the same stages: one simulation serves both.
+    let (sim, other_sim) = if other == workload {
+        let sim = cached_sim(&workload, cache);
+        (sim.clone(), sim)
+    } else {
+        rayon::join(
+            || cached_sim(&workload, cache),
+            || cached_sim(&other, cache),
+        )
+    };
     let (sim, wall) = (&sim.0, sim.1);
     // Every channel's lane streams its own depth of field, its line buffers as wide as
     // its own frame word.
