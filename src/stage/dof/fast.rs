@@ -84,6 +84,28 @@ pub(super) fn has_avx2() -> bool {
     std::arch::is_x86_feature_detected!("avx2")
 }
 
+/// `avx2_or_portable!([generics] (arg: Type, ...) -> Ret, body)` in a function of a module
+/// beside this one: returns `body` (a call of an `inline(always)` function of the arguments
+/// in scope) compiled with AVX2 where the CPU has it, else evaluates it as portable code.
+/// The body is not a closure: a closure is not reliably inlined into the `#[target_feature]`
+/// function, which then runs without AVX2.
+macro_rules! avx2_or_portable {
+    ([$($g:tt)*] ($($a:ident: $t:ty),* $(,)?) -> $r:ty, $body:expr) => {{
+        #[target_feature(enable = "avx2")]
+        #[cfg(target_arch = "x86_64")]
+        fn avx2<$($g)*>($($a: $t),*) -> $r {
+            $body
+        }
+        #[cfg(target_arch = "x86_64")]
+        if super::fast::has_avx2() {
+            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
+            return unsafe { avx2($($a),*) };
+        }
+        $body
+    }};
+}
+pub(super) use avx2_or_portable;
+
 /// Whether sums of `max * 2^f` fit a `u64` (the taps sum to `2^f`).
 pub(super) fn fits_u64(max: u128, f: u32) -> bool {
     max.checked_shl(f)

@@ -2,14 +2,19 @@
 //! ([`super::fixed`]): a strip's input planes, window classes and line buffer, and one
 //! row's horizontal and vertical sums.
 
-use super::fast::{self, Plane};
+use super::fast::{self, Plane, avx2_or_portable};
 use super::fixed::Shares;
 use super::layers::{DepthImage, LayerPlan};
 use super::uniform;
 
 /// The colour, alpha and behind planes of a row (or of rows).
 type Planes<'a, P> = (&'a [P], &'a [P], &'a [P]);
+/// The same, to write.
 type PlanesMut<'a, P> = (&'a mut [P], &'a mut [P], &'a mut [P]);
+/// A box's width and height.
+type Dim = (usize, usize);
+/// A rectangle `(x0, y0, width, height)`.
+type Rect = (usize, usize, usize, usize);
 
 /// One row's exact tap sums (of the horizontal pass, or the vertical) over the positions
 /// whose window needs them.
@@ -45,24 +50,12 @@ impl RowSums {
         y: usize,
         class: &[u8],
     ) {
-        #[target_feature(enable = "avx2")]
-        #[cfg(target_arch = "x86_64")]
-        fn avx2<P: Plane>(
-            s: &mut RowSums,
-            c: &[P],
-            planes: Planes<P>,
-            dim: (usize, usize),
-            y: usize,
-            class: &[u8],
-        ) {
+        let s = self;
+        avx2_or_portable!(
+            [P: Plane]
+            (s: &mut RowSums, c: &[P], planes: Planes<P>, dim: Dim, y: usize, class: &[u8]) -> (),
             s.fill_in(c, planes, dim, y, class)
-        }
-        #[cfg(target_arch = "x86_64")]
-        if fast::has_avx2() {
-            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
-            return unsafe { avx2(self, c, planes, dim, y, class) };
-        }
-        self.fill_in(c, planes, dim, y, class)
+        )
     }
 
     #[inline(always)]
@@ -95,17 +88,12 @@ impl RowSums {
         class: &[u8],
         bsx: &[u64],
     ) {
-        #[target_feature(enable = "avx2")]
-        #[cfg(target_arch = "x86_64")]
-        fn avx2<P: Plane>(s: &mut RowSums, c: &[P], planes: Planes<P>, class: &[u8], bsx: &[u64]) {
+        let s = self;
+        avx2_or_portable!(
+            [P: Plane]
+            (s: &mut RowSums, c: &[P], planes: Planes<P>, class: &[u8], bsx: &[u64]) -> (),
             s.hfill_in(c, planes, class, bsx)
-        }
-        #[cfg(target_arch = "x86_64")]
-        if fast::has_avx2() {
-            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
-            return unsafe { avx2(self, c, planes, class, bsx) };
-        }
-        self.hfill_in(c, planes, class, bsx)
+        )
     }
 
     #[inline(always)]
@@ -135,17 +123,12 @@ impl RowSums {
     /// they are (they fit, docs/dof.md). Returns the colour sums above `max` and the largest
     /// colour or behind word written.
     pub(super) fn saturate<P: Plane>(&self, max: u128, out: PlanesMut<P>) -> (u64, u64) {
-        #[target_feature(enable = "avx2")]
-        #[cfg(target_arch = "x86_64")]
-        fn avx2<P: Plane>(s: &RowSums, max: u128, out: PlanesMut<P>) -> (u64, u64) {
+        let s = self;
+        avx2_or_portable!(
+            [P: Plane]
+            (s: &RowSums, max: u128, out: PlanesMut<P>) -> (u64, u64),
             s.saturate_in(max, out)
-        }
-        #[cfg(target_arch = "x86_64")]
-        if fast::has_avx2() {
-            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
-            return unsafe { avx2(self, max, out) };
-        }
-        self.saturate_in(max, out)
+        )
     }
 
     #[inline(always)]
@@ -246,30 +229,13 @@ impl<P: Plane> Scratch<P> {
     }
 
     /// Layer `l`'s input planes and share classes over the rectangle `(x0, y0, bw, bh)`.
-    pub(super) fn input(
-        &mut self,
-        img: &DepthImage<u32>,
-        plan: &LayerPlan,
-        l: usize,
-        rect: (usize, usize, usize, usize),
-    ) {
-        #[target_feature(enable = "avx2")]
-        #[cfg(target_arch = "x86_64")]
-        fn avx2<P: Plane>(
-            s: &mut Scratch<P>,
-            img: &DepthImage<u32>,
-            plan: &LayerPlan,
-            l: usize,
-            rect: (usize, usize, usize, usize),
-        ) {
-            s.input_in(img, plan, l, rect)
-        }
-        #[cfg(target_arch = "x86_64")]
-        if fast::has_avx2() {
-            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
-            return unsafe { avx2(self, img, plan, l, rect) };
-        }
-        self.input_in(img, plan, l, rect)
+    pub(super) fn input(&mut self, img: &DepthImage<u32>, plan: &LayerPlan, l: usize, r: Rect) {
+        let s = self;
+        avx2_or_portable!(
+            [P: Plane]
+            (s: &mut Scratch<P>, img: &DepthImage<u32>, plan: &LayerPlan, l: usize, r: Rect) -> (),
+            s.input_in(img, plan, l, r)
+        )
     }
 
     #[inline(always)]

@@ -5,6 +5,8 @@
 //! colour and alpha sums are zero and the pixel gets nothing from the layer; and the 16x16
 //! tiles made only of full windows, which the hardware option `dof.skip_uniform_tiles` skips.
 
+use super::fast::avx2_or_portable;
+
 /// Side of the tiles the hardware option skips (output pixels, aligned to the image grid).
 pub const UNIFORM_TILE: usize = 16;
 
@@ -45,17 +47,13 @@ impl Windows {
         class: &[u8],
         val: &[T],
     ) {
-        #[target_feature(enable = "avx2")]
-        #[cfg(target_arch = "x86_64")]
-        fn avx2<T: Copy + PartialEq>(w: &mut Windows, (bw, bh, m): Dims, class: &[u8], val: &[T]) {
-            w.compute_in((bw, bh, m), class, val)
-        }
-        #[cfg(target_arch = "x86_64")]
-        if super::fast::has_avx2() {
-            // SAFETY: `avx2` is safe code compiled with AVX2, called only where the CPU has it.
-            return unsafe { avx2(self, (bw, bh, m), class, val) };
-        }
-        self.compute_in((bw, bh, m), class, val)
+        let w = self;
+        let dims = (bw, bh, m);
+        avx2_or_portable!(
+            [T: Copy + PartialEq]
+            (w: &mut Windows, dims: Dims, class: &[u8], val: &[T]) -> (),
+            w.compute_in(dims, class, val)
+        )
     }
 
     #[inline(always)]
